@@ -1,0 +1,356 @@
+#include "mis/estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "mis/solver.h"
+
+namespace omis {
+
+std::optional<Strategy> parse_strategy(std::string_view name) {
+    if (name == "balance") return Strategy::Balance;
+    if (name == "power") return Strategy::Power;
+    if (name == "maximum") return Strategy::Maximum;
+    if (name == "cutoff") return Strategy::Cutoff;
+    if (name == "optimal-direct") return Strategy::OptimalDirect;
+    if (name == "optimal-progressive") return Strategy::OptimalProgressive;
+    return std::nullopt;
+}
+
+const char* strategy_name(Strategy s) {
+    switch (s) {
+        case Strategy::Balance: return "balance";
+        case Strategy::Power: return "power";
+        case Strategy::Maximum: return "maximum";
+        case Strategy::Cutoff: return "cutoff";
+        case Strategy::OptimalDirect: return "optimal-direct";
+        case Strategy::OptimalProgressive: return "optimal-progressive";
+    }
+    return "unknown";
+}
+
+MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channels,
+                           const std::vector<int>& counts, StrategyOptions options)
+    : strategy_(strategy), options_(options), N_(num_techniques), C_(num_channels),
+      counts_(counts) {
+    if (N_ < 1 || N_ > kMaxMisTechniques)
+        throw std::invalid_argument("techniques: need 1 to " +
+                                    std::to_string(kMaxMisTechniques) + ", got " +
+                                    std::to_string(N_));
+    if (C_ < 1 || C_ > kMaxMisChannels)
+        throw std::invalid_argument("f: need 1 to " + std::to_string(kMaxMisChannels) +
+                                    " channels, got " + std::to_string(C_));
+    if (static_cast<int>(counts_.size()) != N_)
+        throw std::invalid_argument("counts: expected " + std::to_string(N_) +
+                                    " entries, got " + std::to_string(counts_.size()));
+    for (int k = 0; k < N_; ++k) {
+        if (counts_[k] < 0)
+            throw std::invalid_argument("counts: entry " + std::to_string(k) +
+                                        " is negative");
+        samples_per_round_ += counts_[k];
+        n_dot_n_ += double(counts_[k]) * counts_[k];
+    }
+    if (samples_per_round_ == 0)
+        throw std::invalid_argument("counts: at least one technique needs samples");
+    if (!(options_.beta > 0) || !std::isfinite(options_.beta))
+        throw std::invalid_argument("beta: must be a positive finite number");
+    if (!(options_.cutoff >= 0 && options_.cutoff <= 1))
+        throw std::invalid_argument("cutoff: must lie in [0, 1]");
+    reset();
+}
+
+void MisEstimator::reset() {
+    rounds_ = 0;
+    last_rank_ = 0;
+    in_round_.assign(N_, 0);
+    sum_y_.assign(N_ * C_, 0.0);
+    sum_y2_.assign(N_ * C_, 0.0);
+    seen_.assign(N_, 0);
+    const bool optimal = is_optimal(strategy_);
+    a_.assign(optimal ? N_ * N_ : 0, 0.0);
+    b_.assign(optimal ? N_ * C_ : 0, 0.0);
+    m_.assign(optimal ? C_ : 0, 0.0);
+    c_.assign(optimal ? N_ : 0, 0.0);
+    const bool progressive = strategy_ == Strategy::OptimalProgressive;
+    round_f_.assign(progressive ? C_ : 0, 0.0);
+    round_c_.assign(progressive ? N_ : 0, 0.0);
+    round_alpha_.assign(progressive ? N_ * C_ : 0, 0.0);  // round 1: balance
+    mean_round_.assign(progressive ? C_ : 0, 0.0);
+    m2_round_.assign(progressive ? C_ : 0, 0.0);
+}
+
+double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
+                        const int* counts, const double* pdfs, int t) {
+    // q_k = n_k p_k, scaled by the largest so powers cannot overflow.
+    double q_max = 0;
+    for (int k = 0; k < N; ++k) q_max = std::max(q_max, counts[k] * pdfs[k]);
+    const double q_t = counts[t] * pdfs[t];
+    switch (strategy) {
+        case Strategy::Power: {
+            double sum = 0;
+            for (int k = 0; k < N; ++k) {
+                const double r = counts[k] * pdfs[k] / q_max;
+                sum += options.beta == 2.0 ? r * r : std::pow(r, options.beta);
+            }
+            const double r_t = q_t / q_max;
+            return (options.beta == 2.0 ? r_t * r_t : std::pow(r_t, options.beta)) / sum;
+        }
+        case Strategy::Maximum: {
+            for (int k = 0; k < N; ++k) {
+                const double q_k = counts[k] * pdfs[k];
+                if (q_k > q_t || (q_k == q_t && k < t)) return 0.0;
+            }
+            return 1.0;
+        }
+        case Strategy::Cutoff: {
+            const double threshold = options.cutoff * q_max;
+            if (q_t < threshold) return 0.0;
+            double sum = 0;
+            for (int k = 0; k < N; ++k) {
+                const double q_k = counts[k] * pdfs[k];
+                if (q_k >= threshold) sum += q_k;
+            }
+            return q_t / sum;
+        }
+        default: {  // balance
+            double q = 0;
+            for (int k = 0; k < N; ++k) q += counts[k] * pdfs[k];
+            return q_t / q;
+        }
+    }
+}
+
+void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
+    if (t < 0 || t >= N_)
+        throw std::invalid_argument("technique: " + std::to_string(t) +
+                                    " is out of range [0, " + std::to_string(N_) + ")");
+    if (in_round_[t] >= counts_[t])
+        throw std::invalid_argument(
+            "technique: more samples of technique " + std::to_string(t) +
+            " in round " + std::to_string(rounds_ + 1) + " than counts allows (" +
+            std::to_string(counts_[t]) + "); samples must come round by round");
+    for (int k = 0; k < N_; ++k)
+        if (!(pdfs[k] >= 0) || !std::isfinite(pdfs[k]))
+            throw std::invalid_argument("pdfs: density of technique " + std::to_string(k) +
+                                        " is negative or not finite");
+    if (!(pdfs[t] > 0))
+        throw std::invalid_argument("pdfs: the sample's own technique " +
+                                    std::to_string(t) + " has zero density");
+    for (int c = 0; c < C_; ++c)
+        if (!std::isfinite(f[c])) throw std::invalid_argument("f: value is not finite");
+
+    double q = 0;
+    for (int k = 0; k < N_; ++k) q += counts_[k] * pdfs[k];
+    const double inv_q = 1.0 / q;
+
+    if (is_optimal(strategy_)) {
+        // Pooled moments of SPEC §2; r_k = p_k/q.
+        double r[kMaxMisTechniques];
+        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] * inv_q;
+        for (int i = 0; i < N_; ++i) {
+            double* row = &a_[i * N_];
+            for (int j = i; j < N_; ++j) row[j] += r[i] * r[j];
+            c_[i] += r[i];
+        }
+        for (int c = 0; c < C_; ++c) {
+            const double fq = f[c] * inv_q;
+            m_[c] += fq * fq;
+            for (int i = 0; i < N_; ++i) b_[i * C_ + c] += r[i] * fq;
+        }
+        if (strategy_ == Strategy::OptimalProgressive) {
+            for (int c = 0; c < C_; ++c) round_f_[c] += f[c] * inv_q;
+            for (int k = 0; k < N_; ++k) round_c_[k] += r[k];
+        }
+    }
+
+    // Y = w_t f / (n_t p_t); for the balance heuristic (and as the balance
+    // contribution of the optimal strategies) that is f/q.
+    const double scale = (strategy_ == Strategy::Balance || is_optimal(strategy_))
+                             ? inv_q
+                             : heuristic_weight(strategy_, options_, N_, counts_.data(), pdfs, t) /
+                                   (counts_[t] * pdfs[t]);
+    for (int c = 0; c < C_; ++c) {
+        const double y = f[c] * scale;
+        sum_y_[t * C_ + c] += y;
+        sum_y2_[t * C_ + c] += y * y;
+    }
+    ++seen_[t];
+
+    if (++in_round_[t] == counts_[t]) {
+        bool complete = true;
+        for (int k = 0; k < N_; ++k) complete = complete && in_round_[k] == counts_[k];
+        if (complete) finish_round();
+    }
+}
+
+void MisEstimator::add_samples(size_t count, const int* technique,
+                               size_t technique_stride, const double* pdfs,
+                               size_t pdf_stride, const double* f, size_t f_stride) {
+    auto at = [](const auto* base, size_t stride, size_t s) {
+        using T = std::remove_const_t<std::remove_pointer_t<decltype(base)>>;
+        return reinterpret_cast<const T*>(reinterpret_cast<const char*>(base) + s * stride);
+    };
+    for (size_t s = 0; s < count; ++s) {
+        try {
+            add_sample(*at(technique, technique_stride, s), at(pdfs, pdf_stride, s),
+                       at(f, f_stride, s));
+        } catch (const std::invalid_argument& e) {
+            throw std::invalid_argument(std::string(e.what()) + " (sample " +
+                                        std::to_string(s) + ")");
+        }
+    }
+}
+
+void MisEstimator::finish_round() {
+    ++rounds_;
+    std::fill(in_round_.begin(), in_round_.end(), 0);
+    if (strategy_ != Strategy::OptimalProgressive) return;
+
+    // This round's estimate with the α solved before it (unbiased: α does not
+    // depend on this round's samples), folded into Welford statistics.
+    for (int c = 0; c < C_; ++c) {
+        const double e = round_f_[c] + correction(round_alpha_.data(), c, round_c_.data(), 1);
+        const double delta = e - mean_round_[c];
+        mean_round_[c] += delta / rounds_;
+        m2_round_[c] += delta * (e - mean_round_[c]);
+    }
+    std::fill(round_f_.begin(), round_f_.end(), 0.0);
+    std::fill(round_c_.begin(), round_c_.end(), 0.0);
+
+    // α for the next round, from every round so far.
+    const Moments moments = normalized_moments();
+    SolveResult solved = solve_optimal_alpha(N_, C_, moments.a.data(), moments.b.data(),
+                                             moments.m.data(),
+                                             counts_.data(),
+                                             double(rounds_) * samples_per_round_);
+    round_alpha_ = std::move(solved.alpha);
+    last_rank_ = solved.rank;
+}
+
+MisEstimator::Moments MisEstimator::normalized_moments() const {
+    // Divided by the rounds so far: the solver's step rule relies on
+    // Σ_i n_i a_ij ≈ 1, which holds for the per-round normalisation only.
+    const double R = rounds_;
+    Moments out{std::vector<double>(N_ * N_), std::vector<double>(N_ * C_),
+                std::vector<double>(C_)};
+    for (int i = 0; i < N_; ++i)
+        for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = a_[i * N_ + j] / R;
+    for (size_t i = 0; i < out.b.size(); ++i) out.b[i] = b_[i] / R;
+    for (int c = 0; c < C_; ++c) out.m[c] = m_[c] / R;
+    return out;
+}
+
+double MisEstimator::correction(const double* alpha, int c, const double* c_sums,
+                                double rounds) const {
+    // Remove the component of α along n: it adds exactly zero in exact
+    // arithmetic (Σ_k n_k (1 − ĉ_k) = 0 over complete rounds) and only rounding
+    // noise in floating point. A remainder at rounding level means α ∝ n.
+    double n_dot_alpha = 0, alpha_max = 0;
+    for (int k = 0; k < N_; ++k) {
+        n_dot_alpha += counts_[k] * alpha[k * C_ + c];
+        alpha_max = std::max(alpha_max, std::abs(alpha[k * C_ + c]));
+    }
+    const double t = n_dot_alpha / n_dot_n_;
+    double beta[kMaxMisTechniques];
+    double beta_max = 0;
+    for (int k = 0; k < N_; ++k) {
+        beta[k] = alpha[k * C_ + c] - t * counts_[k];
+        beta_max = std::max(beta_max, std::abs(beta[k]));
+    }
+    const double rounding = 8 * N_ * std::numeric_limits<double>::epsilon() * alpha_max;
+    if (beta_max <= rounding) return 0.0;
+    double sum = 0;
+    for (int k = 0; k < N_; ++k) sum += beta[k] * (1.0 - c_sums[k] / rounds);
+    return sum;
+}
+
+std::vector<double> MisEstimator::control_variate_estimate(
+    const std::vector<double>& alpha) const {
+    if (!is_optimal(strategy_))
+        throw std::logic_error("control-variate estimate needs an optimal strategy");
+    if (alpha.size() != size_t(N_) * C_)
+        throw std::invalid_argument("alpha: expected N×C entries");
+    if (rounds_ == 0 || std::any_of(in_round_.begin(), in_round_.end(),
+                                    [](int v) { return v != 0; }))
+        throw std::logic_error("estimate: needs complete rounds");
+    std::vector<double> out(C_);
+    for (int c = 0; c < C_; ++c) {
+        double balance = 0;
+        for (int k = 0; k < N_; ++k) balance += sum_y_[k * C_ + c];
+        out[c] = balance / rounds_ + correction(alpha.data(), c, c_.data(), rounds_);
+    }
+    return out;
+}
+
+MisResult MisEstimator::result() const {
+    if (std::any_of(in_round_.begin(), in_round_.end(), [](int v) { return v != 0; }))
+        throw std::logic_error("estimate: the last round is incomplete (" +
+                               std::to_string(rounds_) + " complete rounds)");
+    if (rounds_ == 0)
+        throw std::logic_error("estimate: no complete round of samples was added");
+    const double R = rounds_;
+    MisResult out;
+    out.rounds = rounds_;
+    out.estimate.assign(C_, 0.0);
+    out.variance.assign(C_, 0.0);
+
+    // Stratified variance of (1/R) Σ_s Y_s: (1/R²) Σ_t N_t Var_t(Y), with the
+    // per-technique sample variance (or E[Y²], an upper bound, from one sample).
+    auto heuristic_variance = [&](int c) {
+        double v = 0;
+        for (int t = 0; t < N_; ++t) {
+            const double n = double(seen_[t]);
+            if (n == 0) continue;
+            const double s = sum_y_[t * C_ + c], s2 = sum_y2_[t * C_ + c];
+            const double var = n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1)) : s2;
+            v += n * var;
+        }
+        return v / (R * R);
+    };
+
+    switch (strategy_) {
+        case Strategy::OptimalDirect: {
+            const Moments mo = normalized_moments();
+            SolveResult solved = solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(),
+                                                     counts_.data(), R * samples_per_round_);
+            out.rank = solved.rank;
+            out.estimate = control_variate_estimate(solved.alpha);
+            // Kept α: the unbiased residual variance of the fit (solver.h, rule 3);
+            // otherwise the estimate is the balance heuristic's, and so is its variance.
+            const double S = R * samples_per_round_, k = solved.free_coefficients;
+            for (int c = 0; c < C_; ++c)
+                out.variance[c] =
+                    solved.kept[c] ? pooled_round_variance(N_, C_, c, mo.a.data(), mo.b.data(),
+                                                           mo.m.data(), counts_.data(),
+                                                           solved.alpha.data()) *
+                                         S / (S - k - 1) / R
+                                   : heuristic_variance(c);
+            break;
+        }
+        case Strategy::OptimalProgressive: {
+            out.rank = last_rank_;
+            for (int c = 0; c < C_; ++c) {
+                out.estimate[c] = mean_round_[c];
+                // Rounds are independent with a common mean, so the spread of
+                // the round estimates measures the average round variance.
+                out.variance[c] = rounds_ > 1 ? m2_round_[c] / (R - 1) / R
+                                              : heuristic_variance(c);
+            }
+            break;
+        }
+        default:
+            for (int c = 0; c < C_; ++c) {
+                double sum = 0;
+                for (int t = 0; t < N_; ++t) sum += sum_y_[t * C_ + c];
+                out.estimate[c] = sum / R;
+                out.variance[c] = heuristic_variance(c);
+            }
+    }
+    return out;
+}
+
+}  // namespace omis

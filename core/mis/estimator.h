@@ -1,0 +1,89 @@
+// Streaming MIS estimator for N techniques and C channels (SPEC §1–§2).
+//
+// Samples arrive one by one or in batches, ordered round by round (each round
+// holds counts[k] samples of technique k, in any order inside the round).
+// Memory is O(N² + N·C) whatever the sample count; sums are in double.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "mis/strategy.h"
+
+namespace omis {
+
+constexpr int kMaxMisTechniques = 32;
+constexpr int kMaxMisChannels = 4;
+
+struct MisResult {
+    std::vector<double> estimate;  // per channel
+    std::vector<double> variance;  // per channel: estimated variance of the estimate
+    int rounds = 0;
+    int rank = 0;  // optimal strategies: techniques kept by the last solve
+};
+
+class MisEstimator {
+public:
+    // Throws std::invalid_argument when counts or sizes are unusable.
+    MisEstimator(Strategy strategy, int num_techniques, int num_channels,
+                 const std::vector<int>& counts, StrategyOptions options = {});
+
+    // One sample drawn by `technique`: pdfs[k] = p_k(x) for every technique k,
+    // f[c] = integrand. Throws std::invalid_argument on bad values or order.
+    void add_sample(int technique, const double* pdfs, const double* f);
+
+    // Strided batch (strides in bytes); errors name the sample's index.
+    void add_samples(size_t count, const int* technique, size_t technique_stride,
+                     const double* pdfs, size_t pdf_stride, const double* f,
+                     size_t f_stride);
+
+    // The estimate over all complete rounds. Throws std::logic_error when a
+    // round is incomplete or no round was added.
+    MisResult result() const;
+
+    // The control-variate estimate (SPEC §2) for a given α (N×C, [k*C + c]);
+    // any α ∝ n reproduces the balance estimate bit for bit.
+    std::vector<double> control_variate_estimate(const std::vector<double>& alpha) const;
+
+    int num_techniques() const { return N_; }
+    int num_channels() const { return C_; }
+    int completed_rounds() const { return rounds_; }
+    Strategy strategy() const { return strategy_; }
+    void reset();
+
+private:
+    void finish_round();
+    struct Moments {
+        std::vector<double> a, b, m;  // full symmetric Â, b̂, m̂, divided by R
+    };
+    Moments normalized_moments() const;
+    // Σ_k β_k (1 − c_k/R) per channel with β = α less its inert n-component.
+    double correction(const double* alpha, int c, const double* c_sums,
+                      double rounds) const;
+
+    Strategy strategy_;
+    StrategyOptions options_;
+    int N_, C_;
+    std::vector<int> counts_;
+    int samples_per_round_ = 0;
+    double n_dot_n_ = 0;
+
+    int rounds_ = 0;
+    std::vector<int> in_round_;  // samples of each technique in the open round
+
+    // Per technique t, sums of Y = w_t f/(n_t p_t) and Y² (heuristics; for the
+    // optimal strategies Y is the balance contribution f/q).
+    std::vector<double> sum_y_, sum_y2_;
+    std::vector<long long> seen_;  // samples per technique
+
+    // Optimal strategies: Σ p_i p_j/q², Σ p_i f/q², Σ f²/q², Σ p_i/q.
+    std::vector<double> a_, b_, m_, c_;
+
+    // Progressive: the open round's Σ f/q and Σ p/q, its α, and Welford
+    // statistics of the per-round estimates.
+    std::vector<double> round_f_, round_c_, round_alpha_;
+    std::vector<double> mean_round_, m2_round_;
+    int last_rank_ = 0;
+};
+
+}  // namespace omis

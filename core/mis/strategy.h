@@ -1,0 +1,37 @@
+// MIS combination strategies (SPEC §1–§2) and their options.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace omis {
+
+enum class Strategy {
+    Balance,
+    Power,
+    Maximum,
+    Cutoff,
+    OptimalDirect,       // solve once from all samples: biased, consistent
+    OptimalProgressive,  // re-solve between rounds: unbiased
+};
+
+struct StrategyOptions {
+    double beta = 2.0;    // exponent of the power heuristic
+    double cutoff = 0.1;  // relative threshold a of the cutoff heuristic
+};
+
+// Names are part of the interface (SPEC §6): "balance", "optimal-direct", ...
+std::optional<Strategy> parse_strategy(std::string_view name);
+const char* strategy_name(Strategy s);
+
+// Weight w_t(x) of technique t under a heuristic strategy (SPEC §1), given
+// every technique's pdf at x. Not defined for the optimal strategies.
+double heuristic_weight(Strategy s, const StrategyOptions& options, int num_techniques,
+                        const int* counts, const double* pdfs, int t);
+
+inline bool is_optimal(Strategy s) {
+    return s == Strategy::OptimalDirect || s == Strategy::OptimalProgressive;
+}
+
+}  // namespace omis

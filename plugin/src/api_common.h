@@ -1,0 +1,69 @@
+// Shared machinery of the C ABI: per-thread errors, reference counting and the
+// exception barrier every exported function runs inside.
+#pragma once
+
+#include <atomic>
+#include <exception>
+#include <new>
+#include <stdexcept>
+#include <string>
+
+#include "omis/omis.h"
+
+namespace omis::api {
+
+// An error with an explicit C code (wrong call order, cancellation, ...).
+struct ApiError : std::runtime_error {
+    OMISError code;
+    ApiError(OMISError c, const std::string& message) : std::runtime_error(message), code(c) {}
+};
+
+void record_error(OMISError code, const char* message);
+
+// Runs body; turns any exception into a recorded error and returns fallback.
+template <class Fallback, class Body>
+Fallback guarded(Fallback fallback, Body&& body) {
+    try {
+        return body();
+    } catch (const ApiError& e) {
+        record_error(e.code, e.what());
+    } catch (const std::invalid_argument& e) {
+        record_error(OMIS_ERROR_INVALID_ARGUMENT, e.what());
+    } catch (const std::logic_error& e) {
+        record_error(OMIS_ERROR_INVALID_OPERATION, e.what());
+    } catch (const std::bad_alloc&) {
+        record_error(OMIS_ERROR_OUT_OF_MEMORY, "out of memory");
+    } catch (const std::exception& e) {
+        record_error(OMIS_ERROR_UNKNOWN, e.what());
+    } catch (...) {
+        record_error(OMIS_ERROR_UNKNOWN, "unknown error");
+    }
+    return fallback;
+}
+
+template <class Body>
+void guarded_void(Body&& body) {
+    guarded(0, [&] {
+        body();
+        return 0;
+    });
+}
+
+// Base of every handle: an intrusive reference count.
+struct RefCounted {
+    std::atomic<int> references{1};
+    virtual ~RefCounted() = default;
+};
+
+template <class T>
+T* checked(T* handle, const char* what) {
+    if (!handle) throw std::invalid_argument(std::string(what) + ": handle is NULL");
+    return handle;
+}
+
+inline void retain(RefCounted* object) { object->references.fetch_add(1); }
+inline void release(RefCounted* object) {
+    if (object->references.fetch_sub(1) == 1) delete object;
+}
+
+}  // namespace omis::api
