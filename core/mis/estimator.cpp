@@ -67,6 +67,7 @@ void MisEstimator::reset() {
     rounds_ = 0;
     last_rank_ = 0;
     in_round_.assign(N_, 0);
+    round_left_ = samples_per_round_;
     sum_y_.assign(N_ * C_, 0.0);
     sum_y2_.assign(N_ * C_, 0.0);
     seen_.assign(N_, 0);
@@ -124,27 +125,36 @@ double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N
     }
 }
 
+namespace {
+
+// Error paths kept out of line so the per-sample path stays small.
+[[noreturn, gnu::cold, gnu::noinline]] void throw_bad_sample(const std::string& message) {
+    throw std::invalid_argument(message);
+}
+
+}  // namespace
+
 void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     if (t < 0 || t >= N_)
-        throw std::invalid_argument("technique: " + std::to_string(t) +
-                                    " is out of range [0, " + std::to_string(N_) + ")");
+        throw_bad_sample("technique: " + std::to_string(t) + " is out of range [0, " +
+                         std::to_string(N_) + ")");
     if (in_round_[t] >= counts_[t])
-        throw std::invalid_argument(
-            "technique: more samples of technique " + std::to_string(t) +
-            " in round " + std::to_string(rounds_ + 1) + " than counts allows (" +
-            std::to_string(counts_[t]) + "); samples must come round by round");
-    for (int k = 0; k < N_; ++k)
-        if (!(pdfs[k] >= 0) || !std::isfinite(pdfs[k]))
-            throw std::invalid_argument("pdfs: density of technique " + std::to_string(k) +
-                                        " is negative or not finite");
-    if (!(pdfs[t] > 0))
-        throw std::invalid_argument("pdfs: the sample's own technique " +
-                                    std::to_string(t) + " has zero density");
-    for (int c = 0; c < C_; ++c)
-        if (!std::isfinite(f[c])) throw std::invalid_argument("f: value is not finite");
-
+        throw_bad_sample("technique: more samples of technique " + std::to_string(t) +
+                         " in round " + std::to_string(rounds_ + 1) +
+                         " than counts allows (" + std::to_string(counts_[t]) +
+                         "); samples must come round by round");
     double q = 0;
-    for (int k = 0; k < N_; ++k) q += counts_[k] * pdfs[k];
+    for (int k = 0; k < N_; ++k) {
+        if (!(pdfs[k] >= 0 && pdfs[k] <= std::numeric_limits<double>::max()))
+            throw_bad_sample("pdfs: density of technique " + std::to_string(k) +
+                             " is negative or not finite");
+        q += counts_[k] * pdfs[k];
+    }
+    if (!(pdfs[t] > 0))
+        throw_bad_sample("pdfs: the sample's own technique " + std::to_string(t) +
+                         " has zero density");
+    for (int c = 0; c < C_; ++c)
+        if (!std::isfinite(f[c])) throw_bad_sample("f: value is not finite");
     const double inv_q = 1.0 / q;
 
     if (is_optimal(strategy_)) {
@@ -180,11 +190,8 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     }
     ++seen_[t];
 
-    if (++in_round_[t] == counts_[t]) {
-        bool complete = true;
-        for (int k = 0; k < N_; ++k) complete = complete && in_round_[k] == counts_[k];
-        if (complete) finish_round();
-    }
+    ++in_round_[t];
+    if (--round_left_ == 0) finish_round();
 }
 
 void MisEstimator::add_samples(size_t count, const int* technique,
@@ -208,6 +215,7 @@ void MisEstimator::add_samples(size_t count, const int* technique,
 void MisEstimator::finish_round() {
     ++rounds_;
     std::fill(in_round_.begin(), in_round_.end(), 0);
+    round_left_ = samples_per_round_;
     if (strategy_ != Strategy::OptimalProgressive) return;
 
     // This round's estimate with the α solved before it (unbiased: α does not

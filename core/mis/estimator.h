@@ -70,6 +70,7 @@ private:
 
     int rounds_ = 0;
     std::vector<int> in_round_;  // samples of each technique in the open round
+    int round_left_ = 0;         // samples still missing from the open round
 
     // Per technique t, sums of Y = w_t f/(n_t p_t) and Y² (heuristics; for the
     // optimal strategies Y is the balance contribution f/q).
