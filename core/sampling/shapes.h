@@ -1,0 +1,118 @@
+// Light shapes with every sampler of SPEC §3 as sample / pdf pairs. All pdfs are in
+// solid angle (sr⁻¹) as seen from the shading point x; a pdf is 0 for a direction that
+// misses the light, so a technique's pdf can be summed over all lights (SPEC §3).
+// One-sidedness and radiance are the caller's concern.
+#pragma once
+
+#include <optional>
+
+#include "math/vec3.h"
+#include "sampling/parallel.h"
+#include "sampling/spherical.h"
+#include "sampling/warp.h"
+
+namespace omis {
+
+// A direction toward the light, the distance to the light point, and the pdf (sr⁻¹).
+struct LightSample {
+    Vec3 dir;
+    double dist = 0;
+    double pdf = 0;
+};
+
+// Ray hit: distance and the shape's own parametrisation of the hit point (used for
+// inversion and for binning in tests).
+struct ShapeHit {
+    double t = 0;
+    Point2 uv;
+};
+
+// corner + [0,1]·edge_u + [0,1]·edge_v, edges perpendicular; emits toward
+// cross(edge_u, edge_v) if one-sided. ShapeHit uv = fractions along the edges.
+struct RectLight {
+    Vec3 corner, edge_u, edge_v;
+
+    double area() const;
+    std::optional<ShapeHit> intersect(const Vec3& x, const Vec3& w) const;
+    double solid_angle(const Vec3& x) const;
+
+    // Uniform over the area; pdf d²/(A |cos θ_l|).
+    std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
+    double pdf_area(const Vec3& x, const Vec3& w) const;
+    // Uniform over the solid angle (SphericalRect); pdf 1/Ω.
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    // Parallel projection; empty / 0 when the light is not wholly above the horizon.
+    std::optional<ParallelPolygon> parallel(const Vec3& x, const Vec3& n) const;
+    std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
+                                               double u2) const;
+    double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+};
+
+// Triangle p0 p1 p2; emits toward cross(p1 − p0, p2 − p0) if one-sided.
+// ShapeHit uv = barycentrics of p1 and p2.
+struct TriangleLight {
+    Vec3 p0, p1, p2;
+
+    double area() const;
+    std::optional<ShapeHit> intersect(const Vec3& x, const Vec3& w) const;
+    double solid_angle(const Vec3& x) const;
+
+    std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
+    double pdf_area(const Vec3& x, const Vec3& w) const;
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    std::optional<ParallelPolygon> parallel(const Vec3& x, const Vec3& n) const;
+    std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
+                                               double u2) const;
+    double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+};
+
+// Disk or ellipse center + α·axis_a + β·axis_b, α² + β² ≤ 1, semi-axes perpendicular
+// (Blender DISK/ELLIPSE). Emits toward cross(axis_a, axis_b). ShapeHit uv = (α, β).
+struct EllipseLight {
+    Vec3 center, axis_a, axis_b;
+
+    double area() const;
+    std::optional<ShapeHit> intersect(const Vec3& x, const Vec3& w) const;
+
+    std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
+    double pdf_area(const Vec3& x, const Vec3& w) const;
+    std::optional<ParallelEllipse> parallel(const Vec3& x, const Vec3& n) const;
+    std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
+                                               double u2) const;
+    double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+};
+
+// Point light of radius r > 0: a disk of radius r centred on the light and facing x
+// (SPEC §4). Its solid angle is exactly a cone, so solid-angle sampling is exact.
+struct SphereLight {
+    Vec3 center;
+    double radius = 0;
+
+    // The disk as seen from x (depends on x).
+    EllipseLight facing_disk(const Vec3& x) const;
+    Cone cone(const Vec3& x) const { return Cone::facing_disk(x, center, radius); }
+    std::optional<ShapeHit> intersect(const Vec3& x, const Vec3& w) const;
+
+    std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
+    double pdf_area(const Vec3& x, const Vec3& w) const;
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
+                                               double u2) const;
+    double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+};
+
+// Sun with an angular radius (half of Blender's `angle`, which is a diameter):
+// a cone of directions at infinite distance (dist = +inf in the samples).
+struct SunLight {
+    Vec3 to_sun;  // unit
+    double half_angle = 0;
+
+    Cone cone() const { return Cone::from_half_angle(to_sun, half_angle); }
+    std::optional<LightSample> sample_solid_angle(double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& w) const;
+};
+
+}  // namespace omis

@@ -1,0 +1,229 @@
+#include "sampling/spherical.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace omis {
+
+namespace {
+constexpr double kHitTol = 1e-7;  // relative slack of hit tests for samples on an edge
+}
+
+double triangle_solid_angle(const Vec3& a, const Vec3& e1, const Vec3& e2) {
+    const Vec3 b = a + e1, c = a + e2;
+    const double la = length(a), lb = length(b), lc = length(c);
+    // a·(b×c) = a·(e1×e2): the triple product of short edges, no cancellation.
+    const double num = std::abs(dot(a, cross(e1, e2)));
+    const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    return 2.0 * std::atan2(num, den);
+}
+
+double polygon_solid_angle(const Vec3& to_first, const std::vector<Vec3>& offsets) {
+    double sum = 0;
+    const Vec3 a = to_first + offsets[0];
+    for (size_t i = 1; i + 1 < offsets.size(); ++i)
+        sum += triangle_solid_angle(a, offsets[i] - offsets[0], offsets[i + 1] - offsets[0]);
+    return sum;
+}
+
+// ---------------------------------------------------------------- rectangle
+
+std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corner,
+                                                 const Vec3& edge_u, const Vec3& edge_v) {
+    SphericalRect r;
+    r.W_ = length(edge_u);
+    r.H_ = length(edge_v);
+    if (!(r.W_ > 0) || !(r.H_ > 0)) return std::nullopt;
+    if (std::abs(dot(edge_u, edge_v)) > 1e-9 * r.W_ * r.H_) return std::nullopt;
+    r.ex_ = edge_u / r.W_;
+    r.ey_ = edge_v / r.H_;
+    r.ez_ = cross(r.ex_, r.ey_);
+    const Vec3 d = corner - x;
+    double zc = dot(d, r.ez_);
+    if (zc > 0) {
+        r.ez_ = -r.ez_;
+        zc = -zc;
+    }
+    r.z_ = -zc;
+    if (!(r.z_ > 0)) return std::nullopt;
+    r.x0_ = dot(d, r.ex_);
+    r.y0_ = dot(d, r.ey_);
+    r.y1_ = r.y0_ + r.H_;
+    r.phi0_ = std::atan2(r.x0_, r.z_);
+    r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
+    r.r0_ = std::hypot(r.x0_, r.z_);
+    r.omega_ = r.sub_solid_angle(r.W_);
+    if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
+    return r;
+}
+
+double SphericalRect::width_at(double delta) const {
+    if (delta >= dphi_) return W_;
+    const double c = std::cos(phi0_ + delta);
+    if (!(c > 0)) return W_;
+    // z (tan φ − tan φ0) = sin δ · r0 / cos φ: no difference of two tangents.
+    return std::clamp(std::sin(delta) * r0_ / c, 0.0, W_);
+}
+
+double SphericalRect::sub_solid_angle(double w) const {
+    const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
+    const double la = length(a), lb = length(b), lc = length(c), ld = length(d);
+    const double num = z_ * w * H_;
+    const double den1 = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    const double den2 = la * lc * ld + dot(a, c) * ld + dot(a, d) * lc + dot(c, d) * la;
+    return 2.0 * (std::atan2(num, den1) + std::atan2(num, den2));
+}
+
+double SphericalRect::h_at(double cos_phi, double y) const {
+    return y * cos_phi / std::sqrt(z_ * z_ + y * y * cos_phi * cos_phi);
+}
+
+DirSample SphericalRect::sample(double u1, double u2) const {
+    const double target = u1 * omega_;
+    double lo = 0, hi = dphi_, delta = u1 * dphi_;
+    for (int it = 0; it < 100; ++it) {
+        const double g = sub_solid_angle(width_at(delta)) - target;
+        if (g == 0) break;
+        (g < 0 ? lo : hi) = delta;
+        const double c = std::cos(phi0_ + delta);
+        const double dg = h_at(c, y1_) - h_at(c, y0_);  // dΩ/dφ, exact
+        double next = delta - g / dg;
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        const bool done = std::abs(next - delta) <= 1e-13 * dphi_ || hi - lo <= 1e-15 * dphi_;
+        delta = next;
+        if (done) break;
+    }
+    const double phi = phi0_ + delta;
+    const double cp = std::cos(phi), sp = std::sin(phi);
+    const double h0 = h_at(cp, y0_), h1 = h_at(cp, y1_);
+    const double hv = std::clamp(h0 + u2 * (h1 - h0), -1.0, 1.0);
+    const double cv = std::sqrt(std::max(0.0, (1.0 - hv) * (1.0 + hv)));
+    DirSample s;
+    s.dir = ex_ * (cv * sp) + ey_ * hv - ez_ * (cv * cp);
+    const double down = cv * cp;
+    s.dist = down > 0 ? z_ / down : std::numeric_limits<double>::max();
+    return s;
+}
+
+double SphericalRect::pdf(const Vec3& w) const {
+    const double lz = dot(w, ez_);
+    if (!(lz < 0)) return 0;
+    const double t = z_ / -lz;
+    const double xu = dot(w, ex_) * t - x0_, yv = dot(w, ey_) * t - y0_;
+    const bool in = xu >= -kHitTol * W_ && xu <= (1 + kHitTol) * W_ && yv >= -kHitTol * H_ &&
+                    yv <= (1 + kHitTol) * H_;
+    return in ? 1.0 / omega_ : 0.0;
+}
+
+Point2 SphericalRect::invert(const Vec3& w) const {
+    const double lx = dot(w, ex_), ly = dot(w, ey_), lz = dot(w, ez_);
+    const double phi = std::atan2(lx, -lz);
+    const double delta = std::clamp(phi - phi0_, 0.0, dphi_);
+    const double u1 = sub_solid_angle(width_at(delta)) / omega_;
+    const double c = std::cos(phi);
+    const double h0 = h_at(c, y0_), h1 = h_at(c, y1_);
+    return {std::clamp(u1, 0.0, 1.0), std::clamp((ly - h0) / (h1 - h0), 0.0, 1.0)};
+}
+
+// ----------------------------------------------------------------- triangle
+
+std::optional<SphericalTriangle> SphericalTriangle::make(const Vec3& x, const Vec3& p0,
+                                                         const Vec3& p1, const Vec3& p2) {
+    SphericalTriangle s;
+    s.a_ = p0 - x;
+    s.eb_ = p1 - p0;
+    s.ec_ = p2 - p0;
+    s.omega_ = triangle_solid_angle(s.a_, s.eb_, s.ec_);
+    if (!(s.omega_ > 0) || !std::isfinite(s.omega_)) return std::nullopt;
+    s.la_ = length(s.a_);
+    s.na_ = s.a_ / s.la_;
+    const Vec3 b = s.a_ + s.eb_;
+    s.lb_ = length(b);
+    s.nb_ = b / s.lb_;
+    // Tangent at â toward ĉ: ĉ − (ĉ·â)â ∝ ec − (ec·â)â, formed from the edge.
+    const Vec3 t = s.ec_ - s.na_ * dot(s.ec_, s.na_);
+    const double lt = length(t);
+    if (!(lt > 0)) return std::nullopt;
+    s.tang_ = t / lt;
+    s.et_ = lt;
+    s.ea_ = dot(s.ec_, s.na_);
+    s.ab_ = dot(s.a_, b) / (s.la_ * s.lb_);
+    s.be_ = dot(s.nb_, s.tang_);
+    s.det_ = std::abs(dot(s.a_, cross(s.eb_, s.tang_))) / (s.la_ * s.lb_);
+    s.gamma_ac_ = std::atan2(length(cross(s.a_, s.ec_)), dot(s.a_, s.a_ + s.ec_));
+    if (!(s.det_ > 0)) return std::nullopt;
+    return s;
+}
+
+double SphericalTriangle::sub_solid_angle(double phi) const {
+    // VOS on unit vectors â, b̂, p̂(φ) = cos φ â + sin φ t̂, expanded so that nothing cancels.
+    const double sp = std::sin(phi), cp = std::cos(phi);
+    return 2.0 * std::atan2(det_ * sp, (1.0 + ab_) * (1.0 + cp) + be_ * sp);
+}
+
+DirSample SphericalTriangle::sample(double u1, double u2) const {
+    // Invert sub_solid_angle(φ) = u1·Ω in closed form through t = tan(φ/2).
+    const double tau = 0.5 * u1 * omega_;
+    const double st = std::sin(tau), ct = std::cos(tau);
+    double phi = 2.0 * std::atan2((1.0 + ab_) * st, det_ * ct - be_ * st);
+    phi = std::clamp(phi, 0.0, gamma_ac_);
+    const double sp = std::sin(phi), cp = std::cos(phi);
+    const Vec3 p = na_ * cp + tang_ * sp;
+    // The arc b̂ → p̂ is the image of the planar segment p1 → C', C' = p0 + τ (p2 − p0):
+    // its plane's normal b × (C' − p1) stays well defined when b̂ and p̂ are nearly
+    // antipodal (x just above a large triangle), unlike b̂ × p̂.
+    const double tau_c = la_ * sp / (et_ * cp - ea_ * sp);
+    const Vec3 m = cross(a_ + eb_, ec_ * tau_c - eb_);
+    const Vec3 perp = cross(m, nb_);
+    const double lp = length(perp);
+    DirSample out;
+    if (!(lp > 0) || !std::isfinite(lp)) {
+        out.dir = nb_;
+    } else {
+        // 1 − cos θ' = u2 (1 − cos γ)  ⇔  sin(θ'/2) = √u2 · sin(γ/2), sin(γ/2) = |p̂ − b̂|/2.
+        const double half = std::asin(std::min(1.0, std::sqrt(u2) * 0.5 * length(p - nb_)));
+        const double th = 2.0 * half;
+        out.dir = nb_ * std::cos(th) + perp * (std::sin(th) / lp);
+    }
+    double b1, b2, t;
+    const Vec3 n = cross(eb_, ec_);
+    const double den = dot(out.dir, n);
+    out.dist = den != 0 ? dot(a_, n) / den : std::numeric_limits<double>::max();
+    if (!(out.dist > 0) || !std::isfinite(out.dist)) out.dist = hit(out.dir, b1, b2, t) ? t : la_;
+    return out;
+}
+
+bool SphericalTriangle::hit(const Vec3& w, double& b1, double& b2, double& t) const {
+    const Vec3 n = cross(eb_, ec_);
+    const double den = dot(w, n);
+    if (den == 0) return false;
+    t = dot(a_, n) / den;
+    if (!(t > 0)) return false;
+    const Vec3 r = w * t - a_;
+    const double nn = dot(n, n);
+    b1 = dot(cross(r, ec_), n) / nn;
+    b2 = dot(cross(eb_, r), n) / nn;
+    return b1 >= -kHitTol && b2 >= -kHitTol && b1 + b2 <= 1 + kHitTol;
+}
+
+double SphericalTriangle::pdf(const Vec3& w) const {
+    double b1, b2, t;
+    return hit(w, b1, b2, t) ? 1.0 / omega_ : 0.0;
+}
+
+Point2 SphericalTriangle::invert(const Vec3& w) const {
+    double b1 = 0, b2 = 0, t = 0;
+    hit(w, b1, b2, t);
+    const double s = 1.0 - b1;  // the hit is (1−s)·p1 + s·C', C' = p0 + τ (p2 − p0)
+    if (!(s > 0)) return {0.0, 0.0};
+    const double tau = std::clamp(b2 / s, 0.0, 1.0);
+    const double phi = std::atan2(length(cross(a_, ec_)) * tau, dot(a_, a_ + ec_ * tau));
+    const double u1 = sub_solid_angle(phi) / omega_;
+    const Vec3 p = na_ * std::cos(phi) + tang_ * std::sin(phi);
+    const Vec3 dw = w - nb_, dp = p - nb_;
+    const double dd = dot(dp, dp);
+    return {std::clamp(u1, 0.0, 1.0), dd > 0 ? std::clamp(dot(dw, dw) / dd, 0.0, 1.0) : 0.0};
+}
+
+}  // namespace omis

@@ -1,0 +1,380 @@
+#include "scene/geometry_scene.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace omis {
+
+namespace {
+
+std::string fmt(const Vec3& v) {
+    std::ostringstream s;
+    s << "(" << v.x << ", " << v.y << ", " << v.z << ")";
+    return s.str();
+}
+
+std::string shape(std::size_t rows, std::size_t cols) {
+    return "(" + std::to_string(rows) + ", " + std::to_string(cols) + ")";
+}
+
+// Nearest float not above / not below x, so a float ray interval never extends
+// past the double interval the caller asked for.
+float float_down(double x) {
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) > x) f = std::nextafter(f, -INFINITY);
+    return f;
+}
+float float_up(double x) {
+    float f = static_cast<float>(x);
+    if (static_cast<double>(f) < x) f = std::nextafter(f, INFINITY);
+    return f;
+}
+
+// Fills an Embree ray; false when the interval is empty (nothing to trace).
+bool make_ray(const Vec3& o, const Vec3& d, double tmin, double tmax, RTCRay& ray) {
+    const double lo = tmin > 0.0 ? tmin : 0.0;  // Embree needs tnear >= 0
+    if (!(tmax >= lo)) return false;             // also rejects NaN
+    ray.org_x = float(o.x); ray.org_y = float(o.y); ray.org_z = float(o.z);
+    ray.dir_x = float(d.x); ray.dir_y = float(d.y); ray.dir_z = float(d.z);
+    ray.tnear = float_up(lo);
+    ray.tfar = float_down(tmax);
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    return ray.tfar >= ray.tnear;
+}
+
+std::size_t thread_slot(std::size_t slots) {
+    static std::atomic<std::size_t> next{0};
+    thread_local const std::size_t slot = next.fetch_add(1, std::memory_order_relaxed);
+    return slot % slots;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Mesh
+
+std::array<Vec3, 3> Mesh::triangle_vertices(std::uint32_t tri) const {
+    const auto& t = triangles.at(tri);
+    return {positions[t[0]], positions[t[1]], positions[t[2]]};
+}
+
+double Mesh::triangle_area(std::uint32_t tri) const {
+    const auto v = triangle_vertices(tri);
+    return 0.5 * length(cross(v[1] - v[0], v[2] - v[0]));
+}
+
+Vec3 Mesh::geometric_normal(std::uint32_t tri) const {
+    const auto v = triangle_vertices(tri);
+    const Vec3 n = cross(v[1] - v[0], v[2] - v[0]);
+    const double len = length(n);
+    return len > 0.0 ? n / len : Vec3{};
+}
+
+Vec3 Mesh::shading_normal(std::uint32_t tri, double b1, double b2) const {
+    if (has_normals()) {
+        const std::size_t c = 3 * std::size_t(tri);
+        const Vec3 n = (1.0 - b1 - b2) * corner_normals.at(c) + b1 * corner_normals[c + 1] +
+                       b2 * corner_normals[c + 2];
+        const double len = length(n);
+        if (len > 0.0 && std::isfinite(len)) return n / len;
+    }
+    return geometric_normal(tri);
+}
+
+Vec3 Mesh::position(std::uint32_t tri, double b1, double b2) const {
+    const auto v = triangle_vertices(tri);
+    return (1.0 - b1 - b2) * v[0] + b1 * v[1] + b2 * v[2];
+}
+
+// ---------------------------------------------------------------------------
+// GeometryScene
+
+GeometryScene::GeometryScene(std::shared_ptr<Device> device, SceneOptions options)
+    : device_(std::move(device)), options_(options), counters_(new Counter[kCounterSlots]) {
+    if (!device_) throw std::invalid_argument("GeometryScene: device is null");
+    scene_ = rtcNewScene(device_->handle());
+    device_->check();
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene_, options_.build_quality);
+    device_->check();
+}
+
+GeometryScene::~GeometryScene() {
+    if (scene_) rtcReleaseScene(scene_);
+}
+
+std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
+    const auto id = static_cast<std::uint32_t>(meshes_.size());
+    const std::string who =
+        "add_mesh: mesh " + std::to_string(id) + (in.name.empty() ? "" : " '" + in.name + "'") + ": ";
+    auto fail = [&](const std::string& what) { throw std::invalid_argument(who + what); };
+
+    // Shapes.
+    if (!in.positions.present()) fail("positions are missing");
+    if (!in.triangles.data && in.triangles.rows > 0) fail("triangles are missing");
+    if (in.positions.cols != 3)
+        fail("positions must have shape (V, 3), got " + shape(in.positions.rows, in.positions.cols));
+    if (in.triangles.cols != 3)
+        fail("triangles must have shape (T, 3), got " + shape(in.triangles.rows, in.triangles.cols));
+    if (in.positions.rows == 0) fail("empty mesh: no vertices");
+    if (in.triangles.rows == 0) fail("empty mesh: no triangles");
+    const std::size_t V = in.positions.rows, T = in.triangles.rows;
+    if (T > (std::size_t(1) << 31) || V > (std::size_t(1) << 32) - 1)
+        fail("too many vertices or triangles for Embree");
+    if (in.normals.present() && (in.normals.rows != 3 * T || in.normals.cols != 3))
+        fail("normals must be per corner with shape (3T, 3) = " + shape(3 * T, 3) + ", got " +
+             shape(in.normals.rows, in.normals.cols));
+    if (in.uvs.present() && (in.uvs.rows != 3 * T || in.uvs.cols != 2))
+        fail("uvs must be per corner with shape (3T, 2) = " + shape(3 * T, 2) + ", got " +
+             shape(in.uvs.rows, in.uvs.cols));
+    if (in.emission && (!isfinite(*in.emission) || in.emission->x < 0 ||
+                        in.emission->y < 0 || in.emission->z < 0))
+        fail("emission must be finite and non-negative, got " + fmt(*in.emission));
+
+    Mesh m;
+    m.name = in.name;
+    m.positions.resize(V);
+    for (std::size_t i = 0; i < V; ++i) {
+        const Vec3 p{in.positions.at(i, 0), in.positions.at(i, 1), in.positions.at(i, 2)};
+        if (!isfinite(p)) fail("vertex " + std::to_string(i) + " is not finite: " + fmt(p));
+        // Embree stores floats: a double beyond float range would become Inf.
+        if (std::abs(p.x) > 1e30 || std::abs(p.y) > 1e30 || std::abs(p.z) > 1e30)
+            fail("vertex " + std::to_string(i) + " is out of single-precision range: " + fmt(p));
+        m.positions[i] = p;
+    }
+    m.triangles.resize(T);
+    for (std::size_t t = 0; t < T; ++t) {
+        const std::uint32_t* idx = in.triangles.data + 3 * t;
+        for (int k = 0; k < 3; ++k) {
+            if (idx[k] >= V) {
+                fail("triangle " + std::to_string(t) + " = (" + std::to_string(idx[0]) + ", " +
+                     std::to_string(idx[1]) + ", " + std::to_string(idx[2]) +
+                     ") has vertex index " + std::to_string(idx[k]) +
+                     " out of range (mesh has " + std::to_string(V) + " vertices)");
+            }
+        }
+        m.triangles[t] = {idx[0], idx[1], idx[2]};
+    }
+    if (in.normals.present()) {
+        m.corner_normals.resize(3 * T);
+        for (std::size_t c = 0; c < 3 * T; ++c) {
+            const Vec3 n{in.normals.at(c, 0), in.normals.at(c, 1), in.normals.at(c, 2)};
+            if (!isfinite(n))
+                fail("normal of corner " + std::to_string(c) + " (triangle " +
+                     std::to_string(c / 3) + ") is not finite: " + fmt(n));
+            m.corner_normals[c] = n;
+        }
+    }
+    if (in.uvs.present()) {
+        m.corner_uvs.resize(3 * T);
+        for (std::size_t c = 0; c < 3 * T; ++c) {
+            const double u = in.uvs.at(c, 0), v = in.uvs.at(c, 1);
+            if (!std::isfinite(u) || !std::isfinite(v))
+                fail("uv of corner " + std::to_string(c) + " (triangle " +
+                     std::to_string(c / 3) + ") is not finite");
+            m.corner_uvs[c] = {u, v};
+        }
+    }
+    if (in.emission && (in.emission->x > 0 || in.emission->y > 0 || in.emission->z > 0))
+        m.emission = in.emission;
+
+    // Areas and degenerate triangles (zero area, or an angle too thin to have a
+    // meaningful plane). They stay in the mesh (indices are stable for baking)
+    // but are never hit and never become lights.
+    std::size_t good = 0;
+    for (std::uint32_t t = 0; t < T; ++t) {
+        const auto v = m.triangle_vertices(t);
+        const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
+        const double twice_area = length(cross(e1, e2));
+        const bool degenerate = !(twice_area > 1e-12 * length(e1) * length(e2));
+        if (degenerate) {
+            ++m.degenerate_triangles;
+        } else {
+            m.area += 0.5 * twice_area;
+            ++good;
+        }
+    }
+
+    // Embree copy (single precision).
+    RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    device_->check();
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), V));
+    auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), T));
+    if (!vb || !ib) {
+        rtcReleaseGeometry(geom);
+        device_->check();
+        throw std::runtime_error(who + "Embree could not allocate buffers");
+    }
+    for (std::size_t i = 0; i < V; ++i) {
+        vb[3 * i + 0] = float(m.positions[i].x);
+        vb[3 * i + 1] = float(m.positions[i].y);
+        vb[3 * i + 2] = float(m.positions[i].z);
+    }
+    for (std::size_t t = 0; t < T; ++t)
+        for (int k = 0; k < 3; ++k) ib[3 * t + k] = m.triangles[t][k];
+    rtcSetGeometryBuildQuality(geom, options_.build_quality);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(scene_, geom, id);
+    rtcReleaseGeometry(geom);
+    device_->check();
+
+    meshes_.push_back(std::move(m));
+    occluder_triangles_ += good;
+    committed_ = false;
+    return id;
+}
+
+std::uint32_t GeometryScene::add_mesh(const std::vector<Vec3>& positions,
+                                      const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                                      std::optional<Vec3> emission, const std::string& name) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+    static_assert(sizeof(std::array<std::uint32_t, 3>) == 3 * sizeof(std::uint32_t), "");
+    MeshInput in;
+    in.name = name;
+    in.positions = ScalarArray::of(positions.empty() ? nullptr : &positions[0].x,
+                                   positions.size(), 3);
+    if (positions.empty()) {  // still report "empty", not "missing"
+        static const double none = 0;
+        in.positions = ScalarArray::of(&none, 0, 3);
+    }
+    in.triangles.data = triangles.empty() ? nullptr : triangles[0].data();
+    in.triangles.rows = triangles.size();
+    in.triangles.cols = 3;
+    in.emission = emission;
+    return add_mesh(in);
+}
+
+void GeometryScene::commit() {
+    rtcCommitScene(scene_);
+    device_->check();
+    committed_ = true;
+}
+
+void GeometryScene::require_committed(const char* what) const {
+    if (!committed_)
+        throw std::logic_error(std::string("GeometryScene::") + what +
+                               ": scene is not committed (call commit() after adding meshes)");
+}
+
+void GeometryScene::count_rays(std::uint64_t n) const {
+    counters_[thread_slot(kCounterSlots)].n.fetch_add(n, std::memory_order_relaxed);
+}
+
+std::uint64_t GeometryScene::rays_traced() const {
+    std::uint64_t sum = 0;
+    for (std::size_t i = 0; i < kCounterSlots; ++i)
+        sum += counters_[i].n.load(std::memory_order_relaxed);
+    return sum;
+}
+
+void GeometryScene::reset_ray_count() {
+    for (std::size_t i = 0; i < kCounterSlots; ++i)
+        counters_[i].n.store(0, std::memory_order_relaxed);
+}
+
+bool GeometryScene::occluded(const Vec3& origin, const Vec3& direction, double tmin,
+                             double tmax) const {
+    require_committed("occluded");
+    if (!has_occluders()) return false;
+    RTCRay ray;
+    if (!make_ray(origin, direction, tmin, tmax, ray)) return false;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded1(scene_, &ctx, &ray);
+    count_rays(1);
+    return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
+}
+
+std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& direction,
+                                            double tmin, double tmax) const {
+    require_committed("intersect");
+    if (!has_occluders()) return std::nullopt;
+    RTCRayHit rh;
+    if (!make_ray(origin, direction, tmin, tmax, rh.ray)) return std::nullopt;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect1(scene_, &ctx, &rh);
+    count_rays(1);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+
+    const Mesh& m = meshes_[rh.hit.geomID];
+    Hit hit;
+    hit.t = rh.ray.tfar;
+    hit.mesh = rh.hit.geomID;
+    hit.triangle = rh.hit.primID;
+    hit.b1 = rh.hit.u;
+    hit.b2 = rh.hit.v;
+    hit.geometric_normal = m.geometric_normal(hit.triangle);
+    if (length(hit.geometric_normal) == 0.0)  // degenerate in double, not in float
+        hit.geometric_normal = normalize(Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
+    hit.position = m.position(hit.triangle, hit.b1, hit.b2);
+    return hit;
+}
+
+void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) const {
+    require_committed("occluded");
+    if (!has_occluders()) {
+        for (std::size_t i = 0; i < count; ++i) out[i] = false;
+        return;
+    }
+    constexpr std::size_t kChunk = 256;
+    RTCRay buf[kChunk];
+    std::size_t where[kChunk];
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    for (std::size_t start = 0; start < count; start += kChunk) {
+        const std::size_t end = std::min(count, start + kChunk);
+        unsigned n = 0;
+        for (std::size_t i = start; i < end; ++i) {
+            out[i] = false;
+            const Ray& r = rays[i];
+            if (make_ray(r.origin, r.direction, r.tmin, r.tmax, buf[n])) where[n++] = i;
+        }
+        if (n == 0) continue;
+        rtcOccluded1M(scene_, &ctx, buf, n, sizeof(RTCRay));
+        count_rays(n);
+        for (unsigned k = 0; k < n; ++k) out[where[k]] = buf[k].tfar < 0.0f;
+    }
+}
+
+const Mesh& GeometryScene::mesh(std::uint32_t id) const {
+    if (id >= meshes_.size())
+        throw std::out_of_range("GeometryScene::mesh: no mesh " + std::to_string(id) + " (have " +
+                                std::to_string(meshes_.size()) + ")");
+    return meshes_[id];
+}
+
+std::vector<EmissiveTriangle> GeometryScene::emissive_triangles() const {
+    std::vector<EmissiveTriangle> out;
+    for (std::uint32_t id = 0; id < meshes_.size(); ++id) {
+        const Mesh& m = meshes_[id];
+        if (!m.is_emissive()) continue;
+        for (std::uint32_t t = 0; t < m.num_triangles(); ++t) {
+            const auto v = m.triangle_vertices(t);
+            const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
+            const Vec3 c = cross(e1, e2);
+            const double twice_area = length(c);
+            if (!(twice_area > 1e-12 * length(e1) * length(e2))) continue;  // degenerate
+            EmissiveTriangle e;
+            e.vertices = v;
+            e.radiance = *m.emission;
+            e.normal = c / twice_area;
+            e.area = 0.5 * twice_area;
+            e.mesh = id;
+            e.triangle = t;
+            out.push_back(e);
+        }
+    }
+    return out;
+}
+
+}  // namespace omis
