@@ -11,6 +11,55 @@
 
 namespace omis {
 
+namespace {
+
+// Pooled moments of SPEC §2 for one sample, with r_k = p_k/q and fq_c = f_c/q:
+// Â (upper triangle) += r rᵀ, ĉ += r, b̂ += r fqᵀ, m̂ += fq². Instantiated for
+// the common sizes so the loops unroll; Nt = Ct = 0 is the general case.
+template <int Nt, int Ct>
+void accumulate_moments(int n_rt, int c_rt, const double* __restrict r,
+                        const double* __restrict fq, double* __restrict a,
+                        double* __restrict c_sum, double* __restrict b,
+                        double* __restrict m) {
+    const int N = Nt ? Nt : n_rt, C = Ct ? Ct : c_rt;
+#pragma GCC unroll 4
+    for (int i = 0; i < N; ++i) {
+        const double ri = r[i];
+#pragma GCC unroll 4
+        for (int j = i; j < N; ++j) a[i * N + j] += ri * r[j];
+        c_sum[i] += ri;
+#pragma GCC unroll 4
+        for (int ch = 0; ch < C; ++ch) b[i * C + ch] += ri * fq[ch];
+    }
+#pragma GCC unroll 4
+    for (int ch = 0; ch < C; ++ch) m[ch] += fq[ch] * fq[ch];
+}
+
+using MomentKernel = void (*)(int, int, const double*, const double*, double*, double*,
+                              double*, double*);
+
+MomentKernel select_moment_kernel(int N, int C) {
+    if (C == 3) {
+        switch (N) {
+            case 1: return accumulate_moments<1, 3>;
+            case 2: return accumulate_moments<2, 3>;
+            case 3: return accumulate_moments<3, 3>;
+            case 4: return accumulate_moments<4, 3>;
+        }
+    }
+    if (C == 1) {
+        switch (N) {
+            case 1: return accumulate_moments<1, 1>;
+            case 2: return accumulate_moments<2, 1>;
+            case 3: return accumulate_moments<3, 1>;
+            case 4: return accumulate_moments<4, 1>;
+        }
+    }
+    return accumulate_moments<0, 0>;
+}
+
+}  // namespace
+
 std::optional<Strategy> parse_strategy(std::string_view name) {
     if (name == "balance") return Strategy::Balance;
     if (name == "power") return Strategy::Power;
@@ -60,6 +109,7 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
         throw std::invalid_argument("beta: must be a positive finite number");
     if (!(options_.cutoff >= 0 && options_.cutoff <= 1))
         throw std::invalid_argument("cutoff: must lie in [0, 1]");
+    moment_kernel_ = select_moment_kernel(N_, C_);
     reset();
 }
 
@@ -158,21 +208,12 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     const double inv_q = 1.0 / q;
 
     if (is_optimal(strategy_)) {
-        // Pooled moments of SPEC §2; r_k = p_k/q.
-        double r[kMaxMisTechniques];
+        double r[kMaxMisTechniques], fq[kMaxMisChannels];
         for (int k = 0; k < N_; ++k) r[k] = pdfs[k] * inv_q;
-        for (int i = 0; i < N_; ++i) {
-            double* row = &a_[i * N_];
-            for (int j = i; j < N_; ++j) row[j] += r[i] * r[j];
-            c_[i] += r[i];
-        }
-        for (int c = 0; c < C_; ++c) {
-            const double fq = f[c] * inv_q;
-            m_[c] += fq * fq;
-            for (int i = 0; i < N_; ++i) b_[i * C_ + c] += r[i] * fq;
-        }
+        for (int ch = 0; ch < C_; ++ch) fq[ch] = f[ch] * inv_q;
+        moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
         if (strategy_ == Strategy::OptimalProgressive) {
-            for (int c = 0; c < C_; ++c) round_f_[c] += f[c] * inv_q;
+            for (int ch = 0; ch < C_; ++ch) round_f_[ch] += fq[ch];
             for (int k = 0; k < N_; ++k) round_c_[k] += r[k];
         }
     }

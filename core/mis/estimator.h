@@ -77,7 +77,10 @@ private:
     std::vector<double> sum_y_, sum_y2_;
     std::vector<long long> seen_;  // samples per technique
 
-    // Optimal strategies: Σ p_i p_j/q², Σ p_i f/q², Σ f²/q², Σ p_i/q.
+    // Optimal strategies: Σ p_i p_j/q², Σ p_i f/q², Σ f²/q², Σ p_i/q, and the
+    // accumulation kernel specialised for N and C.
+    void (*moment_kernel_)(int, int, const double*, const double*, double*, double*,
+                           double*, double*) = nullptr;
     std::vector<double> a_, b_, m_, c_;
 
     // Progressive: the open round's Σ f/q and Σ p/q, its α, and Welford
