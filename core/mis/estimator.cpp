@@ -235,6 +235,15 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     if (--round_left_ == 0) finish_round();
 }
 
+void MisEstimator::add_null_sample(int t) {
+    if (t < 0 || t >= N_ || in_round_[t] >= counts_[t])
+        throw_bad_sample("technique: null sample of technique " + std::to_string(t) +
+                         " out of range or beyond its count in this round");
+    ++seen_[t];
+    ++in_round_[t];
+    if (--round_left_ == 0) finish_round();
+}
+
 void MisEstimator::add_samples(size_t count, const int* technique,
                                size_t technique_stride, const double* pdfs,
                                size_t pdf_stride, const double* f, size_t f_stride) {

@@ -32,6 +32,11 @@ public:
     // f[c] = integrand. Throws std::invalid_argument on bad values or order.
     void add_sample(int technique, const double* pdfs, const double* f);
 
+    // A draw of `technique` that produced no usable direction (a measure-zero
+    // event such as a grazing degenerate sample): it counts toward the round
+    // with f = 0 and no density, so it adds nothing to any sum.
+    void add_null_sample(int technique);
+
     // Strided batch (strides in bytes); errors name the sample's index.
     void add_samples(size_t count, const int* technique, size_t technique_stride,
                      const double* pdfs, size_t pdf_stride, const double* f,

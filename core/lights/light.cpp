@@ -1,0 +1,449 @@
+#include "lights/light.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include "sampling/irradiance.h"
+#include "sampling/warp.h"
+
+namespace omis {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+[[noreturn]] void invalid(const std::string& what, const std::string& problem) {
+    throw std::invalid_argument(what + ": " + problem);
+}
+
+void require_finite(const Vec3& v, const char* what) {
+    if (!isfinite(v)) invalid(what, "is not finite");
+}
+
+void require_emission(const Vec3& e, const char* what) {
+    require_finite(e, what);
+    if (e.x < 0 || e.y < 0 || e.z < 0) invalid(what, "must not be negative");
+}
+
+// Relative tolerance for "perpendicular" edges and axes.
+void require_perpendicular(const Vec3& a, const Vec3& b, const char* what) {
+    if (std::abs(dot(a, b)) > 1e-6 * length(a) * length(b))
+        invalid(what, "edges/axes must be perpendicular");
+}
+
+// Blender's spread (SPEC §4): radiance × max(0, 1 − tan a tan θ) × normalisation,
+// a = (π − s)/2. The normalisation 2/(2 + (2a − π) tan a) equals 1/(1 − b cot b)
+// with b = s/2, evaluated by its series where it would cancel.
+double spread_factor(double cos_theta, double spread) {
+    if (spread >= kPi) return 1.0;
+    const double b = 0.5 * spread;
+    const double one_minus_b_cot_b =
+        b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
+    const double tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
+    const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
+    const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
+    return std::max(0.0, 1 - tan_a * tan_theta) / one_minus_b_cot_b;
+}
+
+// Cycles 3.4 spot falloff for the unit direction from the light to the
+// receiver: the cosine to the axis inside the cone, smoothstep over the blend.
+double spot_attenuation(const Light& light, const Vec3& light_to_x) {
+    const double c = dot(light_to_x, light.spot_axis);
+    if (c <= light.spot_cos_half) return 0.0;
+    double attenuation = c;
+    const double t = c - light.spot_cos_half;
+    if (light.spot_smooth > 0 && t < light.spot_smooth) {
+        const double s = t / light.spot_smooth;
+        attenuation *= s * s * (3 - 2 * s);
+    }
+    return attenuation;
+}
+
+bool has_radius(const Light& l) {
+    return (l.type == LightType::Point || l.type == LightType::Spot) && l.radius > 0;
+}
+
+SphereLight sphere_of(const Light& l) { return SphereLight{l.position, l.radius}; }
+SunLight sun_of(const Light& l) { return SunLight{l.to_sun, l.sun_half_angle}; }
+
+// Emission normal of a planar light (unnormalised).
+Vec3 planar_normal(const Light& l) {
+    switch (l.type) {
+        case LightType::Rect: return cross(l.rect.edge_u, l.rect.edge_v);
+        case LightType::Ellipse: return cross(l.ellipse.axis_a, l.ellipse.axis_b);
+        default: return cross(l.triangle.p1 - l.triangle.p0, l.triangle.p2 - l.triangle.p0);
+    }
+}
+
+// Radiance leaving a planar light toward x along −w, or zero from its back.
+Vec3 planar_radiance(const Light& l, const Vec3& w) {
+    const Vec3 normal = normalize(planar_normal(l));
+    double cos_l = -dot(w, normal);
+    if (l.two_sided) cos_l = std::abs(cos_l);
+    if (cos_l <= 0) return {};
+    return l.emission * spread_factor(cos_l, l.spread);
+}
+
+}  // namespace
+
+const char* light_type_name(LightType type) {
+    switch (type) {
+        case LightType::Rect: return "rect";
+        case LightType::Ellipse: return "ellipse";
+        case LightType::Triangle: return "triangle";
+        case LightType::Point: return "point";
+        case LightType::Spot: return "spot";
+        case LightType::Sun: return "sun";
+        case LightType::World: return "world";
+    }
+    return "unknown";
+}
+
+const char* light_sampler_name(LightSampler sampler) {
+    switch (sampler) {
+        case LightSampler::Area: return "area";
+        case LightSampler::SolidAngle: return "solid-angle";
+        case LightSampler::Parallel: return "parallel";
+    }
+    return "unknown";
+}
+
+bool Light::is_delta() const {
+    switch (type) {
+        case LightType::Point:
+        case LightType::Spot: return radius <= 0;
+        case LightType::Sun: return sun_half_angle <= 0;
+        default: return false;
+    }
+}
+
+double Light::power(double scene_radius) const {
+    const double lum = luminance(emission);
+    const double sides = two_sided ? 2.0 : 1.0;
+    switch (type) {
+        case LightType::Rect: return kPi * rect.area() * lum * sides;
+        case LightType::Ellipse: return kPi * ellipse.area() * lum * sides;
+        case LightType::Triangle: return kPi * triangle.area() * lum * sides;
+        case LightType::Point:
+        case LightType::Spot: return 4 * kPi * lum;  // Cycles does not renormalise spots
+        case LightType::Sun: return lum * kPi * scene_radius * scene_radius;
+        case LightType::World: return kPi * lum * kPi * scene_radius * scene_radius;
+    }
+    return 0;
+}
+
+Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                      const Vec3& radiance, bool two_sided, double spread) {
+    require_finite(corner, "corner");
+    require_finite(edge_u, "edge_u");
+    require_finite(edge_v, "edge_v");
+    require_emission(radiance, "radiance");
+    if (!(length(cross(edge_u, edge_v)) > 0)) invalid("rect light", "has zero area");
+    require_perpendicular(edge_u, edge_v, "rect light");
+    if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
+    Light l;
+    l.type = LightType::Rect;
+    l.rect = RectLight{corner, edge_u, edge_v};
+    l.emission = radiance;
+    l.two_sided = two_sided;
+    l.spread = spread;
+    return l;
+}
+
+Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axis_b,
+                         const Vec3& radiance, bool two_sided, double spread) {
+    require_finite(center, "center");
+    require_finite(axis_a, "axis_u");
+    require_finite(axis_b, "axis_v");
+    require_emission(radiance, "radiance");
+    if (!(length(cross(axis_a, axis_b)) > 0)) invalid("ellipse light", "has zero area");
+    require_perpendicular(axis_a, axis_b, "ellipse light");
+    if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
+    Light l;
+    l.type = LightType::Ellipse;
+    l.ellipse = EllipseLight{center, axis_a, axis_b};
+    l.emission = radiance;
+    l.two_sided = two_sided;
+    l.spread = spread;
+    return l;
+}
+
+Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                          const Vec3& radiance, bool two_sided) {
+    require_finite(p0, "triangle");
+    require_finite(p1, "triangle");
+    require_finite(p2, "triangle");
+    require_emission(radiance, "radiance");
+    if (!(length(cross(p1 - p0, p2 - p0)) > 0)) invalid("triangle light", "has zero area");
+    Light l;
+    l.type = LightType::Triangle;
+    l.triangle = TriangleLight{p0, p1, p2};
+    l.emission = radiance;
+    l.two_sided = two_sided;
+    return l;
+}
+
+Light make_point_light(const Vec3& position, const Vec3& intensity, double radius) {
+    require_finite(position, "position");
+    require_emission(intensity, "intensity");
+    if (!(radius >= 0) || !std::isfinite(radius)) invalid("radius", "must be ≥ 0 and finite");
+    Light l;
+    l.type = LightType::Point;
+    l.position = position;
+    l.emission = intensity;
+    l.radius = radius;
+    return l;
+}
+
+Light make_spot_light(const Vec3& position, const Vec3& direction, const Vec3& intensity,
+                      double radius, double spot_size, double spot_blend) {
+    Light l = make_point_light(position, intensity, radius);
+    require_finite(direction, "direction");
+    if (!(length(direction) > 0)) invalid("direction", "has zero length");
+    if (!(spot_size > 0 && spot_size <= kPi)) invalid("spot_size", "must lie in (0, π]");
+    if (!(spot_blend >= 0 && spot_blend <= 1)) invalid("spot_blend", "must lie in [0, 1]");
+    l.type = LightType::Spot;
+    l.spot_axis = normalize(direction);
+    l.spot_cos_half = std::cos(0.5 * spot_size);
+    l.spot_smooth = (1 - l.spot_cos_half) * spot_blend;
+    return l;
+}
+
+Light make_sun_light(const Vec3& direction, const Vec3& irradiance, double angle) {
+    require_finite(direction, "direction");
+    require_emission(irradiance, "irradiance");
+    if (!(length(direction) > 0)) invalid("direction", "has zero length");
+    if (!(angle >= 0 && angle < kPi)) invalid("angle", "must lie in [0, π)");
+    Light l;
+    l.type = LightType::Sun;
+    l.to_sun = -normalize(direction);
+    l.emission = irradiance;
+    l.sun_half_angle = 0.5 * angle;
+    return l;
+}
+
+Light make_world_light(const Vec3& radiance) {
+    require_emission(radiance, "radiance");
+    Light l;
+    l.type = LightType::World;
+    l.emission = radiance;
+    return l;
+}
+
+std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec3& w) {
+    switch (l.type) {
+        case LightType::Rect: {
+            const auto hit = l.rect.intersect(x, w);
+            if (!hit) return std::nullopt;
+            return Emitted{planar_radiance(l, w), hit->t};
+        }
+        case LightType::Ellipse: {
+            const auto hit = l.ellipse.intersect(x, w);
+            if (!hit) return std::nullopt;
+            return Emitted{planar_radiance(l, w), hit->t};
+        }
+        case LightType::Triangle: {
+            const auto hit = l.triangle.intersect(x, w);
+            if (!hit) return std::nullopt;
+            return Emitted{planar_radiance(l, w), hit->t};
+        }
+        case LightType::Point:
+        case LightType::Spot: {
+            if (!has_radius(l)) return std::nullopt;
+            const auto hit = sphere_of(l).intersect(x, w);
+            if (!hit) return std::nullopt;
+            // The facing disk's radiance I/(πr²) (SPEC §4).
+            Vec3 radiance = l.emission / (kPi * l.radius * l.radius);
+            if (l.type == LightType::Spot)
+                radiance *= spot_attenuation(l, normalize(x - l.position));
+            return Emitted{radiance, hit->t};
+        }
+        case LightType::Sun: {
+            if (l.sun_half_angle <= 0) return std::nullopt;
+            const Cone cone = sun_of(l).cone();
+            if (!cone.contains(w)) return std::nullopt;
+            // Cycles 3.4: a disk of radius tan α at unit distance, radiance
+            // S/(π tan²α cos³θ'), θ' from the sun's centre.
+            const double tan_a = std::tan(l.sun_half_angle);
+            const double c = std::max(dot(w, l.to_sun), 1e-12);
+            return Emitted{l.emission / (kPi * tan_a * tan_a * c * c * c), kInf};
+        }
+        case LightType::World: return Emitted{l.emission, kInf};
+    }
+    return std::nullopt;
+}
+
+std::optional<DeltaIllumination> delta_illumination(const Light& l, const Vec3& x,
+                                                    const Vec3& n) {
+    if (!l.is_delta()) return std::nullopt;
+    if (l.type == LightType::Sun) {
+        const double c = dot(n, l.to_sun);
+        if (c <= 0) return std::nullopt;
+        return DeltaIllumination{l.emission * c, l.to_sun, kInf};
+    }
+    const Vec3 d = l.position - x;
+    const double dist = length(d);
+    if (!(dist > 0)) return std::nullopt;
+    const Vec3 w = d / dist;
+    const double c = dot(n, w);
+    if (c <= 0) return std::nullopt;
+    double scale = c / (dist * dist);
+    if (l.type == LightType::Spot) scale *= spot_attenuation(l, -w);
+    if (scale <= 0) return std::nullopt;
+    return DeltaIllumination{l.emission * scale, w, dist};
+}
+
+bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
+    auto above = [&](std::initializer_list<Vec3> vertices) {
+        for (const Vec3& v : vertices)
+            if (dot(v - x, n) > 0) return true;
+        return false;
+    };
+    auto in_front = [&](const Vec3& on_plane) {
+        return l.two_sided || dot(x - on_plane, planar_normal(l)) > 0;
+    };
+    switch (l.type) {
+        case LightType::Rect: {
+            const RectLight& r = l.rect;
+            return in_front(r.corner) &&
+                   above({r.corner, r.corner + r.edge_u, r.corner + r.edge_v,
+                          r.corner + r.edge_u + r.edge_v});
+        }
+        case LightType::Ellipse: {
+            const EllipseLight& e = l.ellipse;
+            return in_front(e.center) &&
+                   above({e.center + e.axis_a + e.axis_b, e.center + e.axis_a - e.axis_b,
+                          e.center - e.axis_a + e.axis_b, e.center - e.axis_a - e.axis_b});
+        }
+        case LightType::Triangle: {
+            const TriangleLight& t = l.triangle;
+            return in_front(t.p0) && above({t.p0, t.p1, t.p2});
+        }
+        case LightType::Point:
+        case LightType::Spot: {
+            if (!has_radius(l)) return false;
+            if (dot(l.position - x, n) <= -l.radius) return false;
+            return l.type == LightType::Point ||
+                   spot_attenuation(l, normalize(x - l.position)) > 0;
+        }
+        case LightType::Sun:
+            return l.sun_half_angle > 0 && dot(l.to_sun, n) > -std::sin(l.sun_half_angle);
+        case LightType::World: return true;
+    }
+    return false;
+}
+
+bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n) {
+    if (!light_reaches(l, x, n)) return false;
+    if (sampler != LightSampler::Parallel) return true;
+    switch (l.type) {
+        case LightType::Rect: return l.rect.parallel(x, n).has_value();
+        case LightType::Ellipse: return l.ellipse.parallel(x, n).has_value();
+        case LightType::Triangle: return l.triangle.parallel(x, n).has_value();
+        case LightType::Point:
+        case LightType::Spot: return sphere_of(l).facing_disk(x).parallel(x, n).has_value();
+        default: return false;  // no planar region to project for sun and world
+    }
+}
+
+std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, const Vec3& x,
+                                        const Vec3& n, double u1, double u2) {
+    switch (l.type) {
+        case LightType::Rect:
+            if (sampler == LightSampler::Area) return l.rect.sample_area(x, u1, u2);
+            if (sampler == LightSampler::SolidAngle) return l.rect.sample_solid_angle(x, u1, u2);
+            return l.rect.sample_parallel(x, n, u1, u2);
+        case LightType::Triangle:
+            if (sampler == LightSampler::Area) return l.triangle.sample_area(x, u1, u2);
+            if (sampler == LightSampler::SolidAngle)
+                return l.triangle.sample_solid_angle(x, u1, u2);
+            return l.triangle.sample_parallel(x, n, u1, u2);
+        case LightType::Ellipse:  // no closed-form solid-angle sampler: area
+            if (sampler == LightSampler::Parallel) return l.ellipse.sample_parallel(x, n, u1, u2);
+            return l.ellipse.sample_area(x, u1, u2);
+        case LightType::Point:
+        case LightType::Spot: {
+            if (!has_radius(l)) return std::nullopt;
+            const SphereLight s = sphere_of(l);
+            if (sampler == LightSampler::Area) return s.sample_area(x, u1, u2);
+            if (sampler == LightSampler::SolidAngle) return s.sample_solid_angle(x, u1, u2);
+            return s.sample_parallel(x, n, u1, u2);
+        }
+        case LightType::Sun:
+            if (l.sun_half_angle <= 0) return std::nullopt;
+            return sun_of(l).sample_solid_angle(u1, u2);
+        case LightType::World: {
+            const Frame frame(n);
+            const Vec3 local = sample_cosine_hemisphere(u1, u2);
+            const double pdf = pdf_cosine_hemisphere(local);
+            if (!(pdf > 0)) return std::nullopt;
+            return LightSample{frame.to_world(local), kInf, pdf};
+        }
+    }
+    return std::nullopt;
+}
+
+double light_pdf(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n,
+                 const Vec3& w) {
+    switch (l.type) {
+        case LightType::Rect:
+            if (sampler == LightSampler::Area) return l.rect.pdf_area(x, w);
+            if (sampler == LightSampler::SolidAngle) return l.rect.pdf_solid_angle(x, w);
+            return l.rect.pdf_parallel(x, n, w);
+        case LightType::Triangle:
+            if (sampler == LightSampler::Area) return l.triangle.pdf_area(x, w);
+            if (sampler == LightSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, w);
+            return l.triangle.pdf_parallel(x, n, w);
+        case LightType::Ellipse:
+            if (sampler == LightSampler::Parallel) return l.ellipse.pdf_parallel(x, n, w);
+            return l.ellipse.pdf_area(x, w);
+        case LightType::Point:
+        case LightType::Spot: {
+            if (!has_radius(l)) return 0;
+            const SphereLight s = sphere_of(l);
+            if (sampler == LightSampler::Area) return s.pdf_area(x, w);
+            if (sampler == LightSampler::SolidAngle) return s.pdf_solid_angle(x, w);
+            return s.pdf_parallel(x, n, w);
+        }
+        case LightType::Sun:
+            return l.sun_half_angle > 0 ? sun_of(l).pdf_solid_angle(w) : 0;
+        case LightType::World: return std::max(0.0, dot(n, w)) * kInvPi;
+    }
+    return 0;
+}
+
+double unoccluded_irradiance(const Light& l, const Vec3& x, const Vec3& n) {
+    if (!light_reaches(l, x, n)) return 0;
+    const double lum = luminance(l.emission);
+    switch (l.type) {
+        case LightType::Rect: {
+            const RectLight& r = l.rect;
+            return lum * polygon_irradiance(x, n, {r.corner, r.corner + r.edge_u,
+                                                   r.corner + r.edge_u + r.edge_v,
+                                                   r.corner + r.edge_v});
+        }
+        case LightType::Triangle:
+            return lum * polygon_irradiance(x, n, {l.triangle.p0, l.triangle.p1, l.triangle.p2});
+        case LightType::Ellipse:
+            // A 32-gon is ample for a selection weight (error ~1e-3).
+            return lum * ellipse_irradiance(x, n, l.ellipse.center, l.ellipse.axis_a,
+                                            l.ellipse.axis_b, 32);
+        case LightType::Point:
+        case LightType::Spot: {
+            const EllipseLight disk = sphere_of(l).facing_disk(x);
+            double e = lum / (kPi * l.radius * l.radius) *
+                       ellipse_irradiance(x, n, disk.center, disk.axis_a, disk.axis_b, 16);
+            if (l.type == LightType::Spot) e *= spot_attenuation(l, normalize(x - l.position));
+            return e;
+        }
+        case LightType::Sun:
+            // Straddling the horizon still reaches: keep a positive weight.
+            return lum * std::max(dot(n, l.to_sun), 0.5 * std::sin(l.sun_half_angle));
+        case LightType::World: return kPi * lum;
+    }
+    return 0;
+}
+
+}  // namespace omis

@@ -1,0 +1,114 @@
+// Lights with the semantics of Blender 3.4 / Cycles (SPEC §3–§4), stored in
+// physical units, and everything the direct-lighting engine asks of them:
+// emitted radiance along a direction, per-sampler sample/pdf pairs, power and
+// unoccluded irradiance for light selection, and delta-light irradiance.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "math/vec3.h"
+#include "sampling/shapes.h"
+
+namespace omis {
+
+enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World };
+const char* light_type_name(LightType type);
+
+// How a light technique draws a point/direction on a chosen light (SPEC §3).
+enum class LightSampler { Area, SolidAngle, Parallel };
+const char* light_sampler_name(LightSampler sampler);
+
+struct Light {
+    LightType type = LightType::Rect;
+    // Rect/Ellipse/Triangle/World: radiance, W/(m² sr). Point/Spot: intensity,
+    // W/sr. Sun: irradiance on a surface facing it, W/m². RGB.
+    Vec3 emission;
+
+    RectLight rect;          // Rect
+    EllipseLight ellipse;    // Ellipse (disk when the semi-axes are equal)
+    TriangleLight triangle;  // Triangle (emissive mesh triangle)
+    bool two_sided = false;  // Rect/Ellipse/Triangle; emissive meshes are two-sided
+    double spread = kPi;     // Rect/Ellipse: Blender's spread angle
+
+    Vec3 position;           // Point/Spot
+    double radius = 0;       // Point/Spot: > 0 makes a disk facing the receiver
+    Vec3 spot_axis;          // Spot: unit direction the spot shines along
+    double spot_cos_half = -1, spot_smooth = 0;  // Spot: cos(size/2), blend width in cos
+
+    Vec3 to_sun;             // Sun: unit direction toward the sun
+    double sun_half_angle = 0;
+
+    bool cast_shadow = true;      // Blender: cycles.cast_shadow
+    bool visible_to_bsdf = true;  // Blender: cycles.use_multiple_importance_sampling
+
+    // Lights integrated by one deterministic shadow ray, outside MIS.
+    bool is_delta() const;
+    // Emitted flux used by `power` selection (luminance, W); distant lights
+    // (sun, world) are measured over a disk of the scene's bounding radius.
+    double power(double scene_radius) const;
+};
+
+// Factories validate and throw std::invalid_argument naming the problem
+// (zero area, NaN, negative emission, non-perpendicular edges, ...).
+Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                      const Vec3& radiance, bool two_sided, double spread);
+Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axis_b,
+                         const Vec3& radiance, bool two_sided, double spread);
+Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
+                          const Vec3& radiance, bool two_sided);
+Light make_point_light(const Vec3& position, const Vec3& intensity, double radius);
+// spot_size: full cone angle (Blender), spot_blend in [0, 1].
+Light make_spot_light(const Vec3& position, const Vec3& direction, const Vec3& intensity,
+                      double radius, double spot_size, double spot_blend);
+// direction: the way the light travels (Blender's −Z); angle: full angular diameter.
+Light make_sun_light(const Vec3& direction, const Vec3& irradiance, double angle);
+Light make_world_light(const Vec3& radiance);
+
+// Rec. 709 luminance, the scalar used for selection weights and noise.
+inline double luminance(const Vec3& rgb) {
+    return 0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z;
+}
+
+// Radiance arriving at x from direction w (unit) if w hits the light, with the
+// distance to the emitting point (+inf for sun and world). Not for delta lights.
+struct Emitted {
+    Vec3 radiance;
+    double distance = 0;
+};
+std::optional<Emitted> emitted_radiance(const Light& light, const Vec3& x, const Vec3& w);
+
+// Irradiance at (x, n) from a delta light (cosine included), with the unit
+// direction and distance for its shadow ray; empty when it cannot reach x.
+struct DeltaIllumination {
+    Vec3 irradiance;
+    Vec3 direction;
+    double distance = 0;
+};
+std::optional<DeltaIllumination> delta_illumination(const Light& light, const Vec3& x,
+                                                    const Vec3& n);
+
+// Can this light add anything at (x, n)? False when it lies wholly below the
+// horizon or x is behind a one-sided emitter: such lights are left out of
+// every light technique's selection at x (the per-point effect plan).
+bool light_reaches(const Light& light, const Vec3& x, const Vec3& n);
+
+// Whether `sampler` can draw directions toward this light at (x, n): the
+// parallel projection needs the light wholly above the horizon and a planar
+// or disk shape. Lights without a sampler of their own fall back (see
+// sample_light): ellipses sample by area for `solid-angle`; sun and world use
+// their cone and the cosine hemisphere for every sampler.
+bool sampler_applies(const Light& light, LightSampler sampler, const Vec3& x, const Vec3& n);
+
+// A direction toward the light drawn by `sampler`, with its solid-angle pdf
+// (sr⁻¹), and the matching pdf evaluation (0 where w misses the light).
+std::optional<LightSample> sample_light(const Light& light, LightSampler sampler,
+                                        const Vec3& x, const Vec3& n, double u1, double u2);
+double light_pdf(const Light& light, LightSampler sampler, const Vec3& x, const Vec3& n,
+                 const Vec3& w);
+
+// Unoccluded irradiance luminance at (x, n) (SPEC §5 for polygons): the
+// weight of `unoccluded` selection, the paper's "trained" technique.
+double unoccluded_irradiance(const Light& light, const Vec3& x, const Vec3& n);
+
+}  // namespace omis

@@ -1,0 +1,1 @@
+target_sources(omis_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/light.cpp)

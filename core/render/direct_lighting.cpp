@@ -1,0 +1,357 @@
+#include "render/direct_lighting.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "math/random.h"
+#include "mis/estimator.h"
+#include "sampling/warp.h"
+#include "scene/ray_offset.h"
+
+namespace omis {
+namespace {
+
+// Shadow rays to an emissive triangle stop just short of it: it is geometry too.
+constexpr double kEmitterShortening = 1e-5;
+
+// What holds for the whole call: the plan and the lights sorted by role.
+struct Prepared {
+    const Scene& scene;
+    const DirectLightingSettings& settings;
+    EffectPlan plan;
+    std::vector<int> techniques;           // enabled technique indices
+    std::vector<std::uint32_t> integrated, delta;
+    std::vector<double> power;             // per light, for `power` selection
+};
+
+// A light technique at one point: the lights it may pick and their CDF.
+struct LightChoice {
+    std::vector<std::uint32_t> lights;
+    std::vector<double> probability, cdf;
+};
+
+struct Counters {
+    std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;
+};
+
+// Shades points one at a time; one per thread, its scratch reused across points.
+class PointShader {
+public:
+    explicit PointShader(const Prepared& p) : p_(p), choices_(p.settings.techniques.size()) {}
+
+    void shade(std::size_t index, const Vec3& x, const Vec3& n, double* value,
+               double* variance);
+    Counters counters;
+
+private:
+    struct Integrand {
+        Vec3 main, hidden;  // lights BSDF rays see, and those they do not
+    };
+    Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& w);
+    double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
+    void choose_lights(int k, const Vec3& x, const Vec3& n);
+    MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
+                            std::uint64_t mask, const std::vector<int>& active);
+
+    const Prepared& p_;
+    std::vector<LightChoice> choices_;  // per technique (light techniques only)
+    std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
+    struct Hit {
+        std::uint32_t light;
+        Emitted emitted;
+    };
+    std::vector<Hit> hits_;
+};
+
+void PointShader::choose_lights(int k, const Vec3& x, const Vec3& n) {
+    const Technique& t = p_.settings.techniques[k];
+    LightChoice& c = choices_[k];
+    c.lights.clear();
+    c.probability.clear();
+    c.cdf.clear();
+    double total = 0, largest = 0;
+    for (std::uint32_t l : p_.integrated) {
+        const Light& light = p_.scene.lights()[l];
+        if (!sampler_applies(light, t.sampler, x, n)) continue;
+        double w = 1.0;
+        if (t.selection == LightSelection::Power) w = p_.power[l];
+        if (t.selection == LightSelection::Unoccluded) w = unoccluded_irradiance(light, x, n);
+        c.lights.push_back(l);
+        c.probability.push_back(w);
+        largest = std::max(largest, w);
+    }
+    // A light that reaches x but whose weight rounds to zero keeps a tiny share,
+    // so every direction the integrand covers stays sampleable.
+    for (double& w : c.probability) {
+        if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
+        total += w;
+    }
+    double running = 0;
+    for (double& w : c.probability) {
+        w /= total;
+        running += w;
+        c.cdf.push_back(running);
+    }
+    if (!c.cdf.empty()) c.cdf.back() = 1.0;
+}
+
+PointShader::Integrand PointShader::integrand(const Vec3& x, const Vec3& n, const Vec3& w) {
+    Integrand f;
+    const double cos_theta = dot(n, w);
+    if (!(cos_theta > 0)) return f;
+    hits_.clear();
+    for (std::uint32_t l : p_.integrated) {
+        const auto e = emitted_radiance(p_.scene.lights()[l], x, w);
+        if (e && luminance(e->radiance) > 0) hits_.push_back({l, *e});
+    }
+    if (hits_.empty()) return f;
+
+    const GeometryScene& geometry = p_.scene.geometry();
+    const Vec3 origin = offset_ray_origin(x, n, w);
+    auto reach = [&](const Hit& h) {
+        const Light& light = p_.scene.lights()[h.light];
+        return light.type == LightType::Triangle ? h.emitted.distance * (1 - kEmitterShortening)
+                                                 : h.emitted.distance;
+    };
+    // One light: an occlusion ray up to it. Several: one closest-hit ray
+    // decides for all of them.
+    double blocked_at = std::numeric_limits<double>::infinity();
+    bool need_rays = false;
+    for (const Hit& h : hits_) need_rays = need_rays || p_.scene.lights()[h.light].cast_shadow;
+    need_rays = need_rays && p_.plan.shadow_rays;
+    if (need_rays && hits_.size() == 1) {
+        ++counters.rays;
+        if (geometry.occluded(origin, w, 0, reach(hits_[0]))) blocked_at = 0;
+    } else if (need_rays) {
+        ++counters.rays;
+        if (const auto hit = geometry.intersect(origin, w, 0, std::numeric_limits<double>::infinity()))
+            blocked_at = hit->t;
+    }
+    for (const Hit& h : hits_) {
+        const Light& light = p_.scene.lights()[h.light];
+        if (light.cast_shadow && blocked_at < reach(h)) continue;
+        (light.visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
+    }
+    f.main *= cos_theta * kInvPi;
+    f.hidden *= cos_theta * kInvPi;
+    return f;
+}
+
+double PointShader::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
+    const Technique& t = p_.settings.techniques[k];
+    if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
+    const LightChoice& c = choices_[k];
+    double pdf = 0;
+    for (std::size_t i = 0; i < c.lights.size(); ++i)
+        pdf += c.probability[i] * light_pdf(p_.scene.lights()[c.lights[i]], t.sampler, x, n, w);
+    counters.pdf_evaluations += c.lights.size();
+    return pdf;
+}
+
+MisEstimator& PointShader::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
+                                     std::uint64_t mask, const std::vector<int>& active) {
+    auto it = cache.find(mask);
+    if (it == cache.end()) {
+        std::vector<int> counts;
+        for (int k : active) counts.push_back(p_.settings.samples[k]);
+        it = cache.emplace(mask, MisEstimator(p_.settings.strategy, int(active.size()), 3,
+                                              counts, p_.settings.options))
+                 .first;
+    }
+    it->second.reset();
+    ++counters.systems;
+    return it->second;
+}
+
+void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double* value,
+                        double* variance) {
+    Vec3 total, total_variance;
+    const GeometryScene& geometry = p_.scene.geometry();
+
+    // Delta lights: one deterministic shadow ray each.
+    for (std::uint32_t l : p_.delta) {
+        const Light& light = p_.scene.lights()[l];
+        const auto d = delta_illumination(light, x, n);
+        if (!d) continue;
+        if (light.cast_shadow && p_.plan.shadow_rays) {
+            ++counters.rays;
+            if (geometry.occluded(offset_ray_origin(x, n, d->direction), d->direction, 0,
+                                  d->distance))
+                continue;
+        }
+        total += d->irradiance * kInvPi;
+    }
+
+    // Which enabled techniques apply here: a light technique needs a light its
+    // sampler can reach from this point.
+    std::vector<int> active, active_lights;
+    std::uint64_t mask = 0, light_mask = 0;
+    for (int k : p_.techniques) {
+        const Technique& t = p_.settings.techniques[k];
+        if (!t.bsdf) {
+            choose_lights(k, x, n);
+            if (choices_[k].lights.empty()) continue;
+            active_lights.push_back(k);
+            light_mask |= std::uint64_t(1) << k;
+        }
+        active.push_back(k);
+        mask |= std::uint64_t(1) << k;
+    }
+
+    if (!active.empty()) {
+        MisEstimator& est = estimator(main_cache_, mask, active);
+        const bool hidden = p_.plan.bsdf_invisible_lights && !active_lights.empty();
+        MisEstimator* hidden_est = hidden ? &estimator(hidden_cache_, light_mask, active_lights)
+                                          : nullptr;
+        Pcg32 rng = point_stream(p_.settings.seed, index);
+        const Frame frame(n);
+        double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
+
+        for (int r = 0; r < p_.settings.rounds; ++r) {
+            for (std::size_t a = 0; a < active.size(); ++a) {
+                const int k = active[a];
+                const Technique& t = p_.settings.techniques[k];
+                const int hidden_index = hidden && !t.bsdf
+                    ? int(std::find(active_lights.begin(), active_lights.end(), k) - active_lights.begin())
+                    : -1;
+                for (int j = 0; j < p_.settings.samples[k]; ++j) {
+                    ++counters.samples;
+                    const double u0 = rng.next_double(), u1 = rng.next_double(),
+                                 u2 = rng.next_double();
+                    Vec3 w;
+                    bool ok;
+                    if (t.bsdf) {
+                        w = frame.to_world(sample_cosine_hemisphere(u1, u2));
+                        ok = dot(w, n) > 0;
+                    } else {
+                        const LightChoice& c = choices_[k];
+                        const std::size_t i = std::min<std::size_t>(
+                            std::upper_bound(c.cdf.begin(), c.cdf.end(), u0) - c.cdf.begin(),
+                            c.lights.size() - 1);
+                        const auto s = sample_light(p_.scene.lights()[c.lights[i]], t.sampler,
+                                                    x, n, u1, u2);
+                        ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
+                        if (ok) w = s->dir;
+                    }
+                    if (ok) {
+                        for (std::size_t b = 0; b < active.size(); ++b)
+                            pdfs[b] = technique_pdf(active[b], x, n, w);
+                        ok = pdfs[a] > 0 && std::isfinite(pdfs[a]);
+                    }
+                    if (!ok) {
+                        est.add_null_sample(int(a));
+                        if (hidden_index >= 0) hidden_est->add_null_sample(hidden_index);
+                        continue;
+                    }
+                    const Integrand f = integrand(x, n, w);
+                    const double main_f[3] = {f.main.x, f.main.y, f.main.z};
+                    est.add_sample(int(a), pdfs, main_f);
+                    if (hidden_index >= 0) {
+                        std::size_t h = 0;
+                        for (std::size_t b = 0; b < active.size(); ++b)
+                            if (!p_.settings.techniques[active[b]].bsdf) hidden_pdfs[h++] = pdfs[b];
+                        const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
+                        hidden_est->add_sample(hidden_index, hidden_pdfs, hidden_f);
+                    }
+                }
+            }
+        }
+        for (MisEstimator* e : {&est, hidden_est}) {
+            if (!e) continue;
+            const MisResult result = e->result();
+            total += Vec3(result.estimate[0], result.estimate[1], result.estimate[2]);
+            total_variance +=
+                Vec3(result.variance[0], result.variance[1], result.variance[2]);
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        value[c] = total[c];
+        variance[c] = total_variance[c];
+    }
+}
+
+void validate(const Scene& scene, const DirectLightingSettings& s) {
+    if (!scene.committed())
+        throw std::logic_error("scene: not committed (call commit before lighting)");
+    if (s.techniques.size() != s.samples.size())
+        throw std::invalid_argument("samples: expected one count per technique (" +
+                                    std::to_string(s.techniques.size()) + "), got " +
+                                    std::to_string(s.samples.size()));
+    if (s.techniques.size() > kMaxMisTechniques)
+        throw std::invalid_argument("techniques: at most 32");
+    for (int n : s.samples)
+        if (n < 0) throw std::invalid_argument("samples: counts must not be negative");
+    if (s.rounds < 1) throw std::invalid_argument("rounds: must be at least 1");
+    for (std::size_t i = 0; i < s.techniques.size(); ++i)
+        for (std::size_t j = 0; j < i; ++j)
+            if (s.techniques[i] == s.techniques[j])
+                throw std::invalid_argument("techniques: '" + s.techniques[i].name() +
+                                            "' is listed twice");
+}
+
+}  // namespace
+
+DirectLightingStats direct_lighting(const Scene& scene, const double* points,
+                                    const double* normals, std::size_t count,
+                                    const DirectLightingSettings& settings, double* value,
+                                    double* variance, const ProgressFunction& progress) {
+    validate(scene, settings);
+    const auto start = std::chrono::steady_clock::now();
+
+    Prepared p{scene, settings, plan_effects(scene, settings.techniques, settings.samples), {},
+               {}, {}, {}};
+    for (std::size_t k = 0; k < settings.techniques.size(); ++k)
+        if (p.plan.enabled[k]) p.techniques.push_back(int(k));
+    for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
+        const Light& light = scene.lights()[l];
+        (light.is_delta() ? p.delta : p.integrated).push_back(l);
+        p.power.push_back(light.power(scene.bounding_radius()));
+    }
+
+    DirectLightingStats stats;
+    stats.plan = p.plan;
+    tbb::enumerable_thread_specific<PointShader> shaders([&] { return PointShader(p); });
+    std::atomic<bool> cancel{false};
+    std::atomic<std::size_t> done{0};
+    std::mutex report;
+
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+        if (cancel.load(std::memory_order_relaxed)) return;
+        PointShader& shader = shaders.local();
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+            const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
+            shader.shade(i, x, n, value + 3 * i, variance + 3 * i);
+        }
+        const std::size_t finished = done.fetch_add(range.size()) + range.size();
+        if (progress) {
+            std::unique_lock<std::mutex> lock(report, std::try_to_lock);
+            if (lock.owns_lock() && !progress(double(finished) / double(count)))
+                cancel = true;
+        }
+    });
+
+    for (const PointShader& s : shaders) {
+        stats.samples += s.counters.samples;
+        stats.rays_traced += s.counters.rays;
+        stats.mis_systems += s.counters.systems;
+        stats.pdf_evaluations += s.counters.pdf_evaluations;
+    }
+    stats.points = done.load();
+    stats.cancelled = cancel.load();
+    stats.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return stats;
+}
+
+}  // namespace omis

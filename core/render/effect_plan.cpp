@@ -1,0 +1,105 @@
+#include "render/effect_plan.h"
+
+#include <sstream>
+
+namespace omis {
+namespace {
+
+bool has_planar_projection(const Light& l) {
+    switch (l.type) {
+        case LightType::Rect:
+        case LightType::Ellipse:
+        case LightType::Triangle: return true;
+        case LightType::Point:
+        case LightType::Spot: return l.radius > 0;
+        default: return false;
+    }
+}
+
+}  // namespace
+
+EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techniques,
+                        const std::vector<int>& samples) {
+    EffectPlan plan;
+    plan.techniques = techniques;
+    plan.samples = samples;
+    bool any_bsdf_visible = false, any_projectable = false, any_shadow = false;
+    for (const Light& l : scene.lights()) {
+        ++plan.lights_by_type[int(l.type)];
+        any_shadow = any_shadow || l.cast_shadow;
+        if (l.is_delta()) {
+            ++plan.delta_lights;
+            continue;
+        }
+        ++plan.integrated_lights;
+        any_bsdf_visible = any_bsdf_visible || l.visible_to_bsdf;
+        plan.bsdf_invisible_lights = plan.bsdf_invisible_lights || !l.visible_to_bsdf;
+        any_projectable = any_projectable || has_planar_projection(l);
+    }
+    plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
+
+    for (std::size_t k = 0; k < techniques.size(); ++k) {
+        const Technique& t = techniques[k];
+        std::string why;
+        if (k < samples.size() && samples[k] <= 0)
+            why = "no samples requested";
+        else if (t.bsdf && !any_bsdf_visible)
+            why = plan.integrated_lights ? "every light is hidden from BSDF rays"
+                                         : "no light a BSDF ray can hit (delta lights only)";
+        else if (!t.bsdf && plan.integrated_lights == 0)
+            why = "no light with area or angle to sample (delta lights only)";
+        else if (!t.bsdf && t.sampler == LightSampler::Parallel && !any_projectable)
+            why = "no light with a planar region to project";
+        plan.enabled.push_back(why.empty());
+        plan.why.push_back(why.empty() ? "applies (per point: lights above the horizon)" : why);
+        plan.mis_system = plan.mis_system || why.empty();
+    }
+    return plan;
+}
+
+std::string EffectPlan::to_string() const {
+    std::ostringstream s;
+    s << "effect plan\n  lights:";
+    bool any = false;
+    for (int t = 0; t < 7; ++t)
+        if (lights_by_type[t]) {
+            s << ' ' << light_type_name(LightType(t)) << "×" << lights_by_type[t];
+            any = true;
+        }
+    if (!any) s << " none";
+    s << "\n  integrated by MIS: " << integrated_lights << " light(s); delta (one shadow ray"
+      << " each, outside MIS): " << delta_lights << "\n  shadow rays: "
+      << (shadow_rays ? "yes" : "no (nothing can occlude)") << "\n  MIS system per point: "
+      << (mis_system ? "yes" : "no") << "\n";
+    if (bsdf_invisible_lights)
+        s << "  some lights are hidden from BSDF rays: light techniques integrate them alone\n";
+    s << "  techniques:\n";
+    for (std::size_t k = 0; k < techniques.size(); ++k) {
+        s << "    " << (enabled[k] ? "+ " : "- ") << techniques[k].name();
+        if (k < samples.size()) s << " ×" << samples[k];
+        s << ": " << why[k] << "\n";
+    }
+    return s.str();
+}
+
+void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
+                        std::vector<int>& samples) {
+    techniques.clear();
+    samples.clear();
+    bool world = false, integrated = false;
+    for (const Light& l : scene.lights()) {
+        world = world || l.type == LightType::World;
+        integrated = integrated || !l.is_delta();
+    }
+    if (!integrated) return;
+    // The paper's pairing for area lights: solid angle plus area, both selected
+    // by power; the BSDF technique for the world and for very large emitters.
+    techniques.push_back(*parse_technique("power/solid-angle"));
+    samples.push_back(4);
+    techniques.push_back(*parse_technique("power/area"));
+    samples.push_back(2);
+    techniques.push_back(*parse_technique("bsdf"));
+    samples.push_back(world ? 4 : 2);
+}
+
+}  // namespace omis

@@ -1,0 +1,40 @@
+// The effect plan (SPEC §3): what a scene calls for, decided once per scene and
+// refined per shading point, so that effects the scene does not use cost
+// nothing — no rays, no pdf evaluations, no MIS system entries.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "render/scene.h"
+#include "render/techniques.h"
+
+namespace omis {
+
+struct EffectPlan {
+    // What the scene holds.
+    int lights_by_type[7] = {};  // indexed by LightType
+    int integrated_lights = 0;   // non-delta lights: the MIS system's business
+    int delta_lights = 0;        // one shadow ray each, outside MIS
+    bool shadow_rays = false;    // some occluding geometry exists
+    bool bsdf_invisible_lights = false;  // lights only light techniques may see
+
+    // The requested techniques and whether the scene lets each apply at all.
+    std::vector<Technique> techniques;
+    std::vector<int> samples;     // per round
+    std::vector<bool> enabled;    // scene-level verdict
+    std::vector<std::string> why; // one reason per technique
+    bool mis_system = false;      // any enabled technique: a per-point system is built
+
+    std::string to_string() const;
+};
+
+EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techniques,
+                        const std::vector<int>& samples);
+
+// The effect plan's default choice of techniques and samples per round for a
+// scene (what a bake uses when the caller names none).
+void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
+                        std::vector<int>& samples);
+
+}  // namespace omis

@@ -1,0 +1,73 @@
+#include "render/scene.h"
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace omis {
+
+std::uint32_t Scene::add_mesh(const MeshInput& mesh) {
+    if (committed_) throw std::logic_error("scene: already committed; add meshes before commit");
+    return geometry_.add_mesh(mesh);
+}
+
+std::uint32_t Scene::add_mesh(const std::vector<Vec3>& positions,
+                              const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                              std::optional<Vec3> emission) {
+    if (committed_) throw std::logic_error("scene: already committed; add meshes before commit");
+    return geometry_.add_mesh(positions, triangles, emission);
+}
+
+std::uint32_t Scene::add_light(const Light& light) {
+    if (committed_) throw std::logic_error("scene: already committed; add lights before commit");
+    if (light.type == LightType::World) {
+        for (std::size_t i = 0; i < lights_.size(); ++i)
+            if (lights_[i].type == LightType::World) {
+                lights_[i] = light;
+                return std::uint32_t(i);
+            }
+    }
+    lights_.push_back(light);
+    return std::uint32_t(lights_.size() - 1);
+}
+
+void Scene::require_uncommitted_light(std::uint32_t light) const {
+    if (committed_) throw std::logic_error("scene: already committed; set flags before commit");
+    if (light >= lights_.size())
+        throw std::invalid_argument("light: id " + std::to_string(light) + " is out of range (" +
+                                    std::to_string(lights_.size()) + " lights)");
+}
+
+void Scene::set_light_flags(std::uint32_t light, bool cast_shadow, bool visible_to_bsdf) {
+    require_uncommitted_light(light);
+    lights_[light].cast_shadow = cast_shadow;
+    lights_[light].visible_to_bsdf = visible_to_bsdf;
+}
+
+void Scene::commit() {
+    if (committed_) return;
+    geometry_.commit();
+    analytic_lights_ = lights_.size();
+
+    double r2 = 1.0;
+    auto grow = [&](const Vec3& p) { r2 = std::max(r2, dot(p, p)); };
+    for (const Mesh& mesh : geometry_.meshes())
+        for (const Vec3& p : mesh.positions) grow(p);
+    for (const Light& l : lights_) {
+        switch (l.type) {
+            case LightType::Rect: grow(l.rect.corner + l.rect.edge_u + l.rect.edge_v); grow(l.rect.corner); break;
+            case LightType::Ellipse: grow(l.ellipse.center); break;
+            case LightType::Point:
+            case LightType::Spot: grow(l.position); break;
+            default: break;
+        }
+    }
+    bounding_radius_ = std::sqrt(r2);
+
+    // Emissive meshes emit from both sides, as Cycles' Emission shader does.
+    for (const EmissiveTriangle& t : geometry_.emissive_triangles())
+        lights_.push_back(make_triangle_light(t.vertices[0], t.vertices[1], t.vertices[2],
+                                              t.radiance, /*two_sided=*/true));
+    committed_ = true;
+}
+
+}  // namespace omis

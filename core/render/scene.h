@@ -1,0 +1,51 @@
+// A scene for direct lighting: triangle meshes in Embree (occluders, and
+// emitters when they carry emission) plus lights in physical units.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "lights/light.h"
+#include "scene/geometry_scene.h"
+
+namespace omis {
+
+class Scene {
+public:
+    Scene() = default;
+    Scene(const Scene&) = delete;
+    Scene& operator=(const Scene&) = delete;
+
+    // Returns the mesh id. An emissive mesh also becomes one two-sided
+    // triangle light per non-degenerate triangle at commit().
+    std::uint32_t add_mesh(const MeshInput& mesh);
+    // Convenience for C++ callers and tests.
+    std::uint32_t add_mesh(const std::vector<Vec3>& positions,
+                           const std::vector<std::array<std::uint32_t, 3>>& triangles,
+                           std::optional<Vec3> emission = std::nullopt);
+    // Returns the light id (index into lights()). A second world replaces the first.
+    std::uint32_t add_light(const Light& light);
+    void set_light_flags(std::uint32_t light, bool cast_shadow, bool visible_to_bsdf);
+
+    // Builds the acceleration structure and the emissive-triangle lights.
+    void commit();
+    bool committed() const { return committed_; }
+
+    const GeometryScene& geometry() const { return geometry_; }
+    // Every light after commit: analytic ones first, then emissive triangles.
+    const std::vector<Light>& lights() const { return lights_; }
+    std::size_t num_analytic_lights() const { return analytic_lights_; }
+    // Radius of a sphere around the origin holding every mesh and local light.
+    double bounding_radius() const { return bounding_radius_; }
+
+private:
+    void require_uncommitted_light(std::uint32_t light) const;
+
+    GeometryScene geometry_;
+    std::vector<Light> lights_;
+    std::size_t analytic_lights_ = 0;
+    double bounding_radius_ = 1;
+    bool committed_ = false;
+};
+
+}  // namespace omis

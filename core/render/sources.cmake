@@ -1,0 +1,8 @@
+find_package(TBB REQUIRED)
+target_sources(omis_core PRIVATE
+    ${CMAKE_CURRENT_LIST_DIR}/scene.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/techniques.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/effect_plan.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/direct_lighting.cpp
+)
+target_link_libraries(omis_core PUBLIC TBB::tbb)
