@@ -23,46 +23,32 @@ namespace {
 // Shadow rays to an emissive triangle stop just short of it: it is geometry too.
 constexpr double kEmitterShortening = 1e-5;
 
-// What holds for the whole call: the plan and the lights sorted by role.
-struct Prepared {
-    const Scene& scene;
-    const DirectLightingSettings& settings;
-    EffectPlan plan;
-    std::vector<int> techniques;           // enabled technique indices
-    std::vector<std::uint32_t> integrated, delta;
-    std::vector<double> power;             // per light, for `power` selection
-};
-
 // A light technique at one point: the lights it may pick and their CDF.
 struct LightChoice {
     std::vector<std::uint32_t> lights;
     std::vector<double> probability, cdf;
 };
 
-struct Counters {
-    std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;
-};
+}  // namespace
 
-// Shades points one at a time; one per thread, its scratch reused across points.
-class PointShader {
-public:
-    explicit PointShader(const Prepared& p) : p_(p), choices_(p.settings.techniques.size()) {}
+struct PointLighting::Impl {
+    Impl(const LightingContext& context, LightingCounters& counters)
+        : p_(context), counters(counters), choices_(context.settings.techniques.size()) {}
 
-    void shade(std::size_t index, const Vec3& x, const Vec3& n, double* value,
-               double* variance);
-    Counters counters;
+    void shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x, const Vec3& n,
+               const Vec3& ng, double* value, double* variance);
 
-private:
     struct Integrand {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
     };
-    Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& w);
+    Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     void choose_lights(int k, const Vec3& x, const Vec3& n);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t mask, const std::vector<int>& active);
 
-    const Prepared& p_;
+    const LightingContext& p_;
+    LightingCounters& counters;
     std::vector<LightChoice> choices_;  // per technique (light techniques only)
     std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
     struct Hit {
@@ -72,7 +58,7 @@ private:
     std::vector<Hit> hits_;
 };
 
-void PointShader::choose_lights(int k, const Vec3& x, const Vec3& n) {
+void PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     const Technique& t = p_.settings.techniques[k];
     LightChoice& c = choices_[k];
     c.lights.clear();
@@ -104,7 +90,8 @@ void PointShader::choose_lights(int k, const Vec3& x, const Vec3& n) {
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
 }
 
-PointShader::Integrand PointShader::integrand(const Vec3& x, const Vec3& n, const Vec3& w) {
+PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, const Vec3& n,
+                                                              const Vec3& ng, const Vec3& w) {
     Integrand f;
     const double cos_theta = dot(n, w);
     if (!(cos_theta > 0)) return f;
@@ -116,7 +103,7 @@ PointShader::Integrand PointShader::integrand(const Vec3& x, const Vec3& n, cons
     if (hits_.empty()) return f;
 
     const GeometryScene& geometry = p_.scene.geometry();
-    const Vec3 origin = offset_ray_origin(x, n, w);
+    const Vec3 origin = offset_ray_origin(x, ng, w);
     auto reach = [&](const Hit& h) {
         const Light& light = p_.scene.lights()[h.light];
         return light.type == LightType::Triangle ? h.emitted.distance * (1 - kEmitterShortening)
@@ -146,7 +133,7 @@ PointShader::Integrand PointShader::integrand(const Vec3& x, const Vec3& n, cons
     return f;
 }
 
-double PointShader::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
+double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
     const LightChoice& c = choices_[k];
@@ -157,7 +144,7 @@ double PointShader::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec
     return pdf;
 }
 
-MisEstimator& PointShader::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
+MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                                      std::uint64_t mask, const std::vector<int>& active) {
     auto it = cache.find(mask);
     if (it == cache.end()) {
@@ -172,8 +159,9 @@ MisEstimator& PointShader::estimator(std::unordered_map<std::uint64_t, MisEstima
     return it->second;
 }
 
-void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double* value,
-                        double* variance) {
+void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x,
+                                const Vec3& n, const Vec3& ng, double* value,
+                                double* variance) {
     Vec3 total, total_variance;
     const GeometryScene& geometry = p_.scene.geometry();
 
@@ -184,7 +172,7 @@ void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double*
         if (!d) continue;
         if (light.cast_shadow && p_.plan.shadow_rays) {
             ++counters.rays;
-            if (geometry.occluded(offset_ray_origin(x, n, d->direction), d->direction, 0,
+            if (geometry.occluded(offset_ray_origin(x, ng, d->direction), d->direction, 0,
                                   d->distance))
                 continue;
         }
@@ -212,7 +200,7 @@ void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double*
         const bool hidden = p_.plan.bsdf_invisible_lights && !active_lights.empty();
         MisEstimator* hidden_est = hidden ? &estimator(hidden_cache_, light_mask, active_lights)
                                           : nullptr;
-        Pcg32 rng = point_stream(p_.settings.seed, index);
+        Pcg32 rng = point_stream(p_.settings.seed ^ mix64(pass), stream);
         const Frame frame(n);
         double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
 
@@ -252,7 +240,7 @@ void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double*
                         if (hidden_index >= 0) hidden_est->add_null_sample(hidden_index);
                         continue;
                     }
-                    const Integrand f = integrand(x, n, w);
+                    const Integrand f = integrand(x, n, ng, w);
                     const double main_f[3] = {f.main.x, f.main.y, f.main.z};
                     est.add_sample(int(a), pdfs, main_f);
                     if (hidden_index >= 0) {
@@ -279,6 +267,8 @@ void PointShader::shade(std::size_t index, const Vec3& x, const Vec3& n, double*
     }
 }
 
+namespace {
+
 void validate(const Scene& scene, const DirectLightingSettings& s) {
     if (!scene.committed())
         throw std::logic_error("scene: not committed (call commit before lighting)");
@@ -300,26 +290,44 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
 
 }  // namespace
 
+LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettings& s)
+    : scene((validate(scene_, s), scene_)),
+      settings(s),
+      plan(plan_effects(scene_, s.techniques, s.samples)) {
+    for (std::size_t k = 0; k < settings.techniques.size(); ++k)
+        if (plan.enabled[k]) techniques.push_back(int(k));
+    for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
+        const Light& light = scene.lights()[l];
+        (light.is_delta() ? delta : integrated).push_back(l);
+        power.push_back(light.power(scene.bounding_radius()));
+    }
+}
+
+PointLighting::PointLighting(const LightingContext& context)
+    : impl_(std::make_unique<Impl>(context, counters)) {}
+PointLighting::~PointLighting() = default;
+PointLighting::PointLighting(PointLighting&& other) noexcept
+    : counters(other.counters), impl_(std::move(other.impl_)) {
+    if (impl_) impl_ = std::make_unique<Impl>(impl_->p_, counters);
+}
+
+void PointLighting::shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x,
+                          const Vec3& n, const Vec3& ng, double value[3],
+                          double variance[3]) {
+    impl_->shade(stream, pass, x, n, ng, value, variance);
+}
+
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     const double* normals, std::size_t count,
                                     const DirectLightingSettings& settings, double* value,
                                     double* variance, const ProgressFunction& progress) {
-    validate(scene, settings);
     const auto start = std::chrono::steady_clock::now();
-
-    Prepared p{scene, settings, plan_effects(scene, settings.techniques, settings.samples), {},
-               {}, {}, {}};
-    for (std::size_t k = 0; k < settings.techniques.size(); ++k)
-        if (p.plan.enabled[k]) p.techniques.push_back(int(k));
-    for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
-        const Light& light = scene.lights()[l];
-        (light.is_delta() ? p.delta : p.integrated).push_back(l);
-        p.power.push_back(light.power(scene.bounding_radius()));
-    }
+    const LightingContext context(scene, settings);
 
     DirectLightingStats stats;
-    stats.plan = p.plan;
-    tbb::enumerable_thread_specific<PointShader> shaders([&] { return PointShader(p); });
+    stats.plan = context.plan;
+    tbb::enumerable_thread_specific<PointLighting> shaders(
+        [&] { return PointLighting(context); });
     std::atomic<bool> cancel{false};
     std::atomic<std::size_t> done{0};
     std::mutex report;
@@ -327,11 +335,11 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16),
                       [&](const tbb::blocked_range<std::size_t>& range) {
         if (cancel.load(std::memory_order_relaxed)) return;
-        PointShader& shader = shaders.local();
+        PointLighting& shader = shaders.local();
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, x, n, value + 3 * i, variance + 3 * i);
+            shader.shade(i, 0, x, n, n, value + 3 * i, variance + 3 * i);
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {
@@ -341,7 +349,7 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         }
     });
 
-    for (const PointShader& s : shaders) {
+    for (const PointLighting& s : shaders) {
         stats.samples += s.counters.samples;
         stats.rays_traced += s.counters.rays;
         stats.mis_systems += s.counters.systems;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "mis/strategy.h"
@@ -46,5 +47,50 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     const DirectLightingSettings& settings, double* value,
                                     double* variance,
                                     const ProgressFunction& progress = nullptr);
+
+// The building blocks of direct_lighting, for callers that choose their own
+// points and passes (the baker).
+
+// What a lighting job prepares once: validated settings, the effect plan, the
+// lights by role and their powers.
+class LightingContext {
+public:
+    // Throws std::invalid_argument / std::logic_error on bad settings or an
+    // uncommitted scene.
+    LightingContext(const Scene& scene, const DirectLightingSettings& settings);
+
+    const Scene& scene;
+    const DirectLightingSettings settings;
+    const EffectPlan plan;
+    std::vector<int> techniques;  // enabled technique indices
+    std::vector<std::uint32_t> integrated, delta;
+    std::vector<double> power;  // per light, for `power` selection
+};
+
+struct LightingCounters {
+    std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;
+};
+
+// Shades one point at a time; one per thread, as it keeps scratch memory.
+class PointLighting {
+public:
+    explicit PointLighting(const LightingContext& context);
+    ~PointLighting();
+    PointLighting(PointLighting&&) noexcept;
+    PointLighting(const PointLighting&) = delete;
+
+    // E/π and its estimated variance (RGB) at x with shading normal n, over
+    // settings.rounds rounds. ng, the geometric normal, places the ray origins;
+    // (stream, pass) pick the random numbers, so any point can be re-shaded
+    // with fresh, independent samples by changing pass.
+    void shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x, const Vec3& n,
+               const Vec3& ng, double value[3], double variance[3]);
+
+    LightingCounters counters;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace omis

@@ -1,0 +1,293 @@
+#include "bake/bake.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+
+#include "bake/uv_raster.h"
+
+namespace omis {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// One shading point of the bake: a texel centre, a vertex or a corner.
+struct BakePoint {
+    Vec3 position, normal, geometric_normal;
+};
+
+// Texels are processed in square tiles: neighbours share cache lines and
+// lights' per-point work, and a tile is the unit of progress and cancel.
+constexpr int kTile = 16;
+
+std::vector<BakePoint> lightmap_points(const Mesh& mesh, const UvCoverage& cov,
+                                       bool smooth) {
+    std::vector<BakePoint> points(cov.triangle.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (!cov.is_covered(i)) continue;
+        const std::uint32_t t = cov.triangle[i];
+        const Vec3 ng = mesh.geometric_normal(t);
+        Vec3 n = smooth ? mesh.shading_normal(t, cov.b1[i], cov.b2[i]) : ng;
+        if (!(length(n) > 0)) n = ng;
+        points[i] = {mesh.position(t, cov.b1[i], cov.b2[i]), n, ng};
+    }
+    return points;
+}
+
+// Vertices take the area-weighted mean of their faces' normals (shading and
+// geometric); corners take their own.
+std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth) {
+    std::vector<BakePoint> points;
+    if (corners) {
+        for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t)
+            for (int k = 0; k < 3; ++k) {
+                const Vec3 ng = mesh.geometric_normal(t);
+                const double b1 = k == 1, b2 = k == 2;
+                Vec3 n = smooth ? mesh.shading_normal(t, b1, b2) : ng;
+                if (!(length(n) > 0)) n = ng;
+                points.push_back({mesh.positions[mesh.triangles[t][k]], n, ng});
+            }
+        return points;
+    }
+    std::vector<Vec3> sum_n(mesh.positions.size()), sum_ng(mesh.positions.size());
+    for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t) {
+        const double area = mesh.triangle_area(t);
+        const Vec3 ng = mesh.geometric_normal(t);
+        for (int k = 0; k < 3; ++k) {
+            const double b1 = k == 1, b2 = k == 2;
+            const Vec3 n = smooth ? mesh.shading_normal(t, b1, b2) : ng;
+            sum_n[mesh.triangles[t][k]] += n * area;
+            sum_ng[mesh.triangles[t][k]] += ng * area;
+        }
+    }
+    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+        const double ln = length(sum_n[v]), lg = length(sum_ng[v]);
+        const Vec3 ng = lg > 0 ? sum_ng[v] / lg : Vec3(0, 0, 1);
+        points.push_back({mesh.positions[v], ln > 0 ? sum_n[v] / ln : ng, ng});
+    }
+    return points;
+}
+
+// Running statistics of one point over passes: the mean of the pass
+// estimates and the sum of their variances.
+struct PointState {
+    float mean[3] = {0, 0, 0};
+    float variance_sum[3] = {0, 0, 0};
+    std::uint16_t passes = 0;
+    bool done = false;
+};
+
+double relative_error(const PointState& s) {
+    if (s.passes == 0) return 0;
+    const double value = luminance(Vec3(s.mean[0], s.mean[1], s.mean[2]));
+    const double var = luminance(Vec3(s.variance_sum[0], s.variance_sum[1], s.variance_sum[2])) /
+                       (double(s.passes) * s.passes);
+    if (value <= 0) return var > 0 ? 1.0 : 0.0;
+    return std::sqrt(std::max(0.0, var)) / value;
+}
+
+}  // namespace
+
+const char* bake_status_name(BakeStatus status) {
+    switch (status) {
+        case BakeStatus::Complete: return "complete";
+        case BakeStatus::TimeBudget: return "time budget reached";
+        case BakeStatus::NoiseTarget: return "noise target reached";
+        case BakeStatus::Cancelled: return "cancelled";
+    }
+    return "unknown";
+}
+
+BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& progress) {
+    const auto start = Clock::now();
+    if (!scene.committed())
+        throw std::logic_error("scene: not committed (call commit before baking)");
+    if (in.mesh >= scene.geometry().num_meshes())
+        throw std::invalid_argument("mesh: id " + std::to_string(in.mesh) + " is out of range (" +
+                                    std::to_string(scene.geometry().num_meshes()) + " meshes)");
+    if (in.margin < 0) throw std::invalid_argument("margin: must not be negative");
+    if (in.time_budget < 0 || !std::isfinite(in.time_budget))
+        throw std::invalid_argument("time_budget: must be a non-negative number of seconds");
+    if (in.noise_target < 0 || !std::isfinite(in.noise_target))
+        throw std::invalid_argument("noise_target: must be a non-negative relative error");
+    if (in.rounds_per_pass < 1) throw std::invalid_argument("rounds_per_pass: must be ≥ 1");
+    const Mesh& mesh = scene.geometry().mesh(in.mesh);
+
+    BakeSettings settings = in;
+    if (settings.lighting.techniques.empty())
+        default_techniques(scene, settings.lighting.techniques, settings.lighting.samples);
+
+    // Where to shade.
+    BakeResult result;
+    UvCoverage coverage;
+    std::vector<BakePoint> points;
+    if (settings.target == BakeTarget::Lightmap) {
+        coverage = rasterize_uv(mesh, settings.width, settings.height);
+        points = lightmap_points(mesh, coverage, settings.smooth_normals);
+        result.width = settings.width;
+        result.height = settings.height;
+    } else {
+        points = vertex_points(mesh, settings.target == BakeTarget::Corners,
+                               settings.smooth_normals);
+        result.width = int(points.size());
+        result.height = 1;
+    }
+    const std::size_t count = points.size();
+    auto covered = [&](std::size_t i) {
+        return settings.target != BakeTarget::Lightmap || coverage.is_covered(i);
+    };
+
+    // Passes: all rounds at once unless a time or noise budget wants to look
+    // between passes.
+    const bool progressive = settings.time_budget > 0 || settings.noise_target > 0;
+    const int total_rounds = std::max(1, settings.lighting.rounds);
+    const int pass_rounds = progressive ? std::min(settings.rounds_per_pass, total_rounds)
+                                        : total_rounds;
+    const int max_passes = (total_rounds + pass_rounds - 1) / pass_rounds;
+    DirectLightingSettings pass_settings = settings.lighting;
+    pass_settings.rounds = pass_rounds;
+    const LightingContext context(scene, pass_settings);
+
+    std::vector<PointState> state(count);
+    tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
+    std::atomic<bool> cancel{false}, out_of_time{false};
+    std::mutex report;
+    const int tiles_x = settings.target == BakeTarget::Lightmap
+                            ? (result.width + kTile - 1) / kTile
+                            : int((count + kTile * kTile - 1) / (kTile * kTile));
+    const int tiles_y = settings.target == BakeTarget::Lightmap ? (result.height + kTile - 1) / kTile
+                                                                : 1;
+    const std::size_t tiles = std::size_t(tiles_x) * tiles_y;
+    auto tile_points = [&](std::size_t tile, auto&& visit) {
+        if (settings.target != BakeTarget::Lightmap) {
+            const std::size_t begin = tile * kTile * kTile;
+            for (std::size_t i = begin; i < std::min(count, begin + kTile * kTile); ++i) visit(i);
+            return;
+        }
+        const int tx = int(tile % tiles_x), ty = int(tile / tiles_x);
+        for (int y = ty * kTile; y < std::min(result.height, (ty + 1) * kTile); ++y)
+            for (int x = tx * kTile; x < std::min(result.width, (tx + 1) * kTile); ++x)
+                visit(std::size_t(y) * result.width + x);
+    };
+    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+
+    // Uncovered texels are never shaded: they count as done for the noise target.
+    for (std::size_t i = 0; i < count; ++i)
+        if (!covered(i)) state[i].done = true;
+
+    std::atomic<std::size_t> tiles_done{0};
+    int pass = 0;
+    BakeStatus status = BakeStatus::Complete;
+    for (; pass < max_passes; ++pass) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
+                if (cancel.load(std::memory_order_relaxed) ||
+                    out_of_time.load(std::memory_order_relaxed))
+                    return;
+                if (settings.time_budget > 0 && elapsed() >= settings.time_budget) {
+                    out_of_time = true;
+                    return;
+                }
+                PointLighting& shader = shaders.local();
+                tile_points(tile, [&](std::size_t i) {
+                    PointState& s = state[i];
+                    if (!covered(i) || s.done) return;
+                    double value[3], variance[3];
+                    const BakePoint& p = points[i];
+                    shader.shade(i, std::uint64_t(pass), p.position, p.normal,
+                                 p.geometric_normal, value, variance);
+                    ++s.passes;
+                    for (int c = 0; c < 3; ++c) {
+                        s.mean[c] += float((value[c] - s.mean[c]) / s.passes);
+                        s.variance_sum[c] += float(variance[c]);
+                    }
+                    if (settings.noise_target > 0 && relative_error(s) <= settings.noise_target)
+                        s.done = true;
+                });
+                const std::size_t done = ++tiles_done;
+                if (progress) {
+                    double fraction = double(done) / double(tiles * max_passes);
+                    if (settings.time_budget > 0)
+                        fraction = std::max(fraction, elapsed() / settings.time_budget);
+                    std::unique_lock<std::mutex> lock(report, std::try_to_lock);
+                    if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
+                }
+            }
+        });
+        if (cancel) {
+            status = BakeStatus::Cancelled;
+            break;
+        }
+        if (out_of_time) {
+            status = BakeStatus::TimeBudget;
+            ++pass;  // the interrupted pass counts
+            break;
+        }
+        if (settings.noise_target > 0 &&
+            std::all_of(state.begin(), state.end(), [&](const PointState& s) { return s.done; })) {
+            status = BakeStatus::NoiseTarget;
+            ++pass;
+            break;
+        }
+    }
+
+    // Outputs, then the margin around UV islands.
+    result.value.assign(count * 3, 0.f);
+    result.noise.assign(count, 0.f);
+    result.mask.assign(count, 0.f);
+    BakeStats& stats = result.stats;
+    double sum_error = 0, sum_passes = 0;
+    std::size_t n_covered = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        if (!covered(i)) continue;
+        const PointState& s = state[i];
+        for (int c = 0; c < 3; ++c) result.value[3 * i + c] = s.mean[c];
+        const double err = relative_error(s);
+        result.noise[i] = float(err);
+        result.mask[i] = 1.f;
+        sum_error += err;
+        sum_passes += s.passes;
+        stats.max_relative_error = std::max(stats.max_relative_error, err);
+        ++n_covered;
+    }
+    if (settings.target == BakeTarget::Lightmap && settings.margin > 0) {
+        const std::vector<std::int64_t> source = margin_sources(coverage, settings.margin);
+        for (std::size_t i = 0; i < count; ++i) {
+            if (coverage.is_covered(i) || source[i] < 0) continue;
+            for (int c = 0; c < 3; ++c) result.value[3 * i + c] = result.value[3 * source[i] + c];
+            result.noise[i] = result.noise[source[i]];
+        }
+    }
+
+    for (const PointLighting& s : shaders) {
+        stats.samples += s.counters.samples;
+        stats.rays_traced += s.counters.rays;
+        stats.mis_systems += s.counters.systems;
+    }
+    stats.status = status;
+    stats.passes = pass;
+    stats.texels = count;
+    stats.covered = n_covered;
+    stats.degenerate_uv_triangles = coverage.degenerate_uv_triangles;
+    stats.overlapping_texels = coverage.overlapping_texels;
+    stats.mean_relative_error = n_covered ? sum_error / n_covered : 0;
+    stats.samples_per_texel = n_covered ? double(stats.samples) / n_covered : 0;
+    stats.passes_per_texel = n_covered ? sum_passes / n_covered : 0;
+    stats.plan = context.plan.to_string();
+    for (std::size_t k = 0; k < settings.lighting.techniques.size(); ++k) {
+        stats.techniques.push_back(settings.lighting.techniques[k].name());
+        stats.samples_per_round.push_back(settings.lighting.samples[k]);
+    }
+    stats.seconds = elapsed();
+    return result;
+}
+
+}  // namespace omis

@@ -1,0 +1,67 @@
+// Baking direct lighting (E/π, SPEC §3) into a mesh's UV lightmap or onto its
+// vertices/corners, in parallel tiles, under a sample, time or noise budget.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "render/direct_lighting.h"
+
+namespace omis {
+
+enum class BakeTarget { Lightmap, Vertices, Corners };
+enum class BakeStatus { Complete, TimeBudget, NoiseTarget, Cancelled };
+const char* bake_status_name(BakeStatus status);
+
+struct BakeSettings {
+    // Techniques, samples per round, strategy, seed. `lighting.rounds` is the
+    // sample budget: at most that many rounds per texel. Empty techniques:
+    // the effect plan's default choice.
+    DirectLightingSettings lighting;
+    BakeTarget target = BakeTarget::Lightmap;
+    std::uint32_t mesh = 0;
+    int width = 0, height = 0;  // lightmap size
+    int margin = 16;            // texels of extension around UV islands
+    bool smooth_normals = true; // interpolate corner normals (else flat)
+    double time_budget = 0;     // seconds; 0 = none
+    double noise_target = 0;    // relative standard error per texel; 0 = none
+    // Rounds per pass when a time or noise budget asks for progressive
+    // passes. Each pass is one independent estimate per texel (its own
+    // solve); passes are averaged.
+    int rounds_per_pass = 4;
+};
+
+struct BakeStats {
+    BakeStatus status = BakeStatus::Complete;
+    double seconds = 0;
+    std::uint64_t samples = 0, rays_traced = 0, mis_systems = 0;
+    double samples_per_texel = 0;      // mean over covered texels
+    double mean_relative_error = 0;    // estimated standard error / value, covered texels
+    double max_relative_error = 0;
+    int passes = 0;                    // passes started
+    double passes_per_texel = 0;       // mean; fewer where the noise target was met
+    std::size_t texels = 0, covered = 0, degenerate_uv_triangles = 0, overlapping_texels = 0;
+    std::string plan;                  // EffectPlan::to_string()
+    std::vector<std::string> techniques;
+    std::vector<int> samples_per_round;
+};
+
+struct BakeResult {
+    int width = 0, height = 0;  // lightmap; vertices/corners: count × 1
+    std::vector<float> value;   // width·height·3, E/π, row 0 at the bottom
+    std::vector<float> noise;   // width·height, estimated relative standard error
+    std::vector<float> mask;    // width·height, 1 where baked, 0 margin or empty
+    BakeStats stats;
+};
+
+// fraction in [0, 1]; may be called from any thread; returning false cancels.
+using BakeProgress = std::function<bool(double)>;
+
+// Throws std::invalid_argument for unusable input (no UVs, bad size, a mesh
+// id out of range, ...). A cancelled bake returns with status Cancelled.
+BakeResult bake(const Scene& scene, const BakeSettings& settings,
+                const BakeProgress& progress = nullptr);
+
+}  // namespace omis

@@ -1,0 +1,4 @@
+target_sources(omis_core PRIVATE
+    ${CMAKE_CURRENT_LIST_DIR}/uv_raster.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/bake.cpp
+)

@@ -1,0 +1,146 @@
+#include "bake/uv_raster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace omis {
+namespace {
+
+struct P2 {
+    double x, y;
+};
+
+// Edge function of p against edge a→b, computed on the lexicographically
+// ordered end points and negated for the other direction: two triangles that
+// share an edge get exactly opposite values.
+double edge_function(const P2& a, const P2& b, const P2& p, bool& top_left) {
+    const bool forward = (a.x < b.x) || (a.x == b.x && a.y < b.y);
+    const P2& lo = forward ? a : b;
+    const P2& hi = forward ? b : a;
+    const double e = (hi.x - lo.x) * (p.y - lo.y) - (hi.y - lo.y) * (p.x - lo.x);
+    // For a counter-clockwise triangle, points on edge a→b count when the edge
+    // runs downward, or leftward-horizontal... any fixed half of the
+    // directions works; the reverse edge then gets the other half.
+    const double dx = b.x - a.x, dy = b.y - a.y;
+    top_left = dy < 0 || (dy == 0 && dx > 0);
+    return forward ? e : -e;
+}
+
+}  // namespace
+
+UvCoverage rasterize_uv(const Mesh& mesh, int width, int height) {
+    if (!mesh.has_uvs())
+        throw std::invalid_argument("mesh '" + mesh.name + "': has no UV map to bake into");
+    if (width < 1 || height < 1)
+        throw std::invalid_argument("size: width and height must be positive, got " +
+                                    std::to_string(width) + "×" + std::to_string(height));
+    if (double(width) * height > double(1u << 30))
+        throw std::invalid_argument("size: " + std::to_string(width) + "×" +
+                                    std::to_string(height) + " texels is beyond what omis bakes");
+    UvCoverage c;
+    c.width = width;
+    c.height = height;
+    const std::size_t texels = std::size_t(width) * height;
+    c.triangle.assign(texels, kNoTriangle);
+    c.b1.assign(texels, 0.f);
+    c.b2.assign(texels, 0.f);
+
+    for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t) {
+        P2 v[3];
+        for (int k = 0; k < 3; ++k) {
+            const auto& uv = mesh.corner_uvs[3 * t + k];
+            v[k] = {uv[0] * width, uv[1] * height};
+        }
+        const double area2 = (v[1].x - v[0].x) * (v[2].y - v[0].y) -
+                             (v[1].y - v[0].y) * (v[2].x - v[0].x);
+        if (!(std::abs(area2) > 0) || !std::isfinite(area2)) {
+            ++c.degenerate_uv_triangles;
+            continue;
+        }
+        // Visit vertices counter-clockwise; remember which original corner is which.
+        int order[3] = {0, 1, 2};
+        if (area2 < 0) std::swap(order[1], order[2]);
+        const P2 a = v[order[0]], b = v[order[1]], d = v[order[2]];
+
+        const int x0 = std::max(0, int(std::floor(std::min({a.x, b.x, d.x}) - 0.5)));
+        const int x1 = std::min(width - 1, int(std::ceil(std::max({a.x, b.x, d.x}) - 0.5)));
+        const int y0 = std::max(0, int(std::floor(std::min({a.y, b.y, d.y}) - 0.5)));
+        const int y1 = std::min(height - 1, int(std::ceil(std::max({a.y, b.y, d.y}) - 0.5)));
+        for (int y = y0; y <= y1; ++y) {
+            for (int x = x0; x <= x1; ++x) {
+                const P2 p{x + 0.5, y + 0.5};
+                bool tl0, tl1, tl2;
+                const double e0 = edge_function(b, d, p, tl0);  // opposite a
+                const double e1 = edge_function(d, a, p, tl1);  // opposite b
+                const double e2 = edge_function(a, b, p, tl2);  // opposite d
+                if (e0 < 0 || e1 < 0 || e2 < 0) continue;
+                if ((e0 == 0 && !tl0) || (e1 == 0 && !tl1) || (e2 == 0 && !tl2)) continue;
+                const double sum = e0 + e1 + e2;
+                double w[3];
+                w[order[0]] = e0 / sum;
+                w[order[1]] = e1 / sum;
+                w[order[2]] = e2 / sum;
+                const std::size_t texel = std::size_t(y) * width + x;
+                if (c.triangle[texel] != kNoTriangle)
+                    ++c.overlapping_texels;
+                else
+                    ++c.covered;
+                c.triangle[texel] = t;
+                c.b1[texel] = float(w[1]);
+                c.b2[texel] = float(w[2]);
+            }
+        }
+    }
+    return c;
+}
+
+std::vector<std::int64_t> margin_sources(const UvCoverage& c, int margin) {
+    const int W = c.width, H = c.height;
+    std::vector<std::int64_t> source(std::size_t(W) * H, -1);
+    std::vector<std::size_t> frontier, next;
+    for (std::size_t i = 0; i < source.size(); ++i)
+        if (c.is_covered(i)) {
+            source[i] = std::int64_t(i);
+            frontier.push_back(i);
+        }
+    auto distance2 = [&](std::size_t a, std::int64_t b) {
+        const double dx = double(a % W) - double(b % W), dy = double(a / W) - double(b / W);
+        return dx * dx + dy * dy;
+    };
+    for (int ring = 0; ring < margin && !frontier.empty(); ++ring) {
+        next.clear();
+        // Candidates of this ring take the nearest source among their filled
+        // neighbours; sources are fixed only after the whole ring is scanned so
+        // the result does not depend on scan order.
+        std::vector<std::pair<std::size_t, std::int64_t>> fills;
+        for (std::size_t f : frontier) {
+            const int fx = int(f % W), fy = int(f / W);
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int x = fx + dx, y = fy + dy;
+                    if ((dx == 0 && dy == 0) || x < 0 || y < 0 || x >= W || y >= H) continue;
+                    const std::size_t t = std::size_t(y) * W + x;
+                    if (source[t] >= 0) continue;
+                    fills.emplace_back(t, source[f]);
+                }
+        }
+        std::sort(fills.begin(), fills.end());
+        for (std::size_t i = 0; i < fills.size();) {
+            const std::size_t t = fills[i].first;
+            std::int64_t best = fills[i].second;
+            for (; i < fills.size() && fills[i].first == t; ++i) {
+                const std::int64_t s = fills[i].second;
+                const double ds = distance2(t, s), db = distance2(t, best);
+                if (ds < db || (ds == db && s < best)) best = s;
+            }
+            source[t] = best;
+            next.push_back(t);
+        }
+        frontier.swap(next);
+    }
+    return source;
+}
+
+}  // namespace omis

@@ -1,0 +1,43 @@
+// Where a mesh's UV layout puts its triangles in a W×H texture: for every
+// texel whose centre ((x + ½)/W, (y + ½)/H) lies in a triangle, that triangle
+// and the barycentrics there. Row y = 0 is at v = 0 (the bottom row, as
+// Blender stores image pixels).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "scene/geometry_scene.h"
+
+namespace omis {
+
+constexpr std::uint32_t kNoTriangle = 0xFFFFFFFFu;
+
+struct UvCoverage {
+    int width = 0, height = 0;
+    // Per texel: the covering triangle (kNoTriangle if none) and the
+    // barycentrics of its vertices 1 and 2 at the texel centre.
+    std::vector<std::uint32_t> triangle;
+    std::vector<float> b1, b2;
+    std::size_t covered = 0;
+    std::size_t degenerate_uv_triangles = 0;  // zero UV area: cannot hold a texel
+    std::size_t overlapping_texels = 0;       // claimed by more than one triangle
+
+    bool is_covered(std::size_t texel) const { return triangle[texel] != kNoTriangle; }
+};
+
+// The coverage rule: a centre strictly inside a triangle is covered; a centre
+// exactly on an edge belongs to exactly one of the two triangles sharing it
+// (the top-left rule, evaluated on a canonical ordering of the edge's end
+// points so both triangles compute the same number). Hence no cracks and no
+// double coverage along shared edges. Throws std::invalid_argument when the
+// mesh has no UVs or the size is unusable.
+UvCoverage rasterize_uv(const Mesh& mesh, int width, int height);
+
+// Extends covered texels into uncovered ones up to `margin` texels away
+// (Chebyshev distance, as repeated 8-neighbour dilation), each filled texel
+// taking the index of the nearest covered texel (Euclidean) — Cycles'
+// "extend" margin. Returns, per texel, the source texel or -1.
+std::vector<std::int64_t> margin_sources(const UvCoverage& coverage, int margin);
+
+}  // namespace omis
