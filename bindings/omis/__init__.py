@@ -3,6 +3,6 @@
 The native part (``omis._omis``) is a pybind11 module over the library's C ABI;
 this package re-exports it and adds the pure-Python helpers.
 """
-from ._omis import __version__, combine, STRATEGIES
+from ._omis import __version__, combine, STRATEGIES, Scene, direct_lighting, Cancelled
 
-__all__ = ["__version__", "combine", "STRATEGIES"]
+__all__ = ["__version__", "combine", "STRATEGIES", "Scene", "direct_lighting", "Cancelled"]

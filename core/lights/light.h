@@ -4,6 +4,7 @@
 // unoccluded irradiance for light selection, and delta-light irradiance.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 
@@ -28,6 +29,7 @@ struct Light {
     RectLight rect;          // Rect
     EllipseLight ellipse;    // Ellipse (disk when the semi-axes are equal)
     TriangleLight triangle;  // Triangle (emissive mesh triangle)
+    std::uint32_t mesh = ~0u, mesh_triangle = ~0u;  // Triangle: where it is in the geometry
     bool two_sided = false;  // Rect/Ellipse/Triangle; emissive meshes are two-sided
     double spread = kPi;     // Rect/Ellipse: Blender's spread angle
 

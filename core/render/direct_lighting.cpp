@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -20,8 +21,9 @@
 namespace omis {
 namespace {
 
-// Shadow rays to an emissive triangle stop just short of it: it is geometry too.
-constexpr double kEmitterShortening = 1e-5;
+// An emissive triangle is geometry too: a closest hit within this relative
+// depth of it is the emitter itself or a coplanar neighbour, not a blocker.
+constexpr double kEmitterDepthTolerance = 1e-4;
 
 // A light technique at one point: the lights it may pick and their CDF.
 struct LightChoice {
@@ -104,29 +106,43 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
 
     const GeometryScene& geometry = p_.scene.geometry();
     const Vec3 origin = offset_ray_origin(x, ng, w);
-    auto reach = [&](const Hit& h) {
-        const Light& light = p_.scene.lights()[h.light];
-        return light.type == LightType::Triangle ? h.emitted.distance * (1 - kEmitterShortening)
-                                                 : h.emitted.distance;
-    };
-    // One light: an occlusion ray up to it. Several: one closest-hit ray
-    // decides for all of them.
-    double blocked_at = std::numeric_limits<double>::infinity();
-    bool need_rays = false;
-    for (const Hit& h : hits_) need_rays = need_rays || p_.scene.lights()[h.light].cast_shadow;
-    need_rays = need_rays && p_.plan.shadow_rays;
-    if (need_rays && hits_.size() == 1) {
-        ++counters.rays;
-        if (geometry.occluded(origin, w, 0, reach(hits_[0]))) blocked_at = 0;
-    } else if (need_rays) {
-        ++counters.rays;
-        if (const auto hit = geometry.intersect(origin, w, 0, std::numeric_limits<double>::infinity()))
-            blocked_at = hit->t;
-    }
+    // Distances below are measured from the offset origin; the offset itself
+    // can exceed a relative shortening (1/65536 m near the world origin).
+    const double offset = length(origin - x);
+    bool need_rays = false, only_analytic = true;
     for (const Hit& h : hits_) {
         const Light& light = p_.scene.lights()[h.light];
-        if (light.cast_shadow && blocked_at < reach(h)) continue;
-        (light.visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
+        need_rays = need_rays || light.cast_shadow;
+        only_analytic = only_analytic && light.type != LightType::Triangle;
+    }
+    need_rays = need_rays && p_.plan.shadow_rays;
+
+    // One analytic light: an occlusion ray up to it. Otherwise one closest-hit
+    // ray decides for every light along w, and a hit on an emitting triangle
+    // (or at its depth, on a coplanar neighbour) does not shadow it.
+    std::optional<omis::Hit> blocker;
+    bool single_blocked = false;
+    const bool single = hits_.size() == 1 && only_analytic;
+    if (need_rays) {
+        ++counters.rays;
+        if (single)
+            single_blocked = geometry.occluded(origin, w, 0, hits_[0].emitted.distance - offset);
+        else
+            blocker = geometry.intersect(origin, w, 0, std::numeric_limits<double>::infinity());
+    }
+    auto visible = [&](const Hit& h) {
+        const Light& light = p_.scene.lights()[h.light];
+        if (!need_rays || !light.cast_shadow) return true;
+        if (single) return !single_blocked;
+        if (!blocker) return true;
+        const double depth = h.emitted.distance - offset;
+        if (light.type != LightType::Triangle) return blocker->t >= depth;
+        if (blocker->mesh == light.mesh && blocker->triangle == light.mesh_triangle) return true;
+        return blocker->t >= depth * (1 - kEmitterDepthTolerance);
+    };
+    for (const Hit& h : hits_) {
+        if (!visible(h)) continue;
+        (p_.scene.lights()[h.light].visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
     }
     f.main *= cos_theta * kInvPi;
     f.hidden *= cos_theta * kInvPi;

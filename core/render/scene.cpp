@@ -55,18 +55,30 @@ void Scene::commit() {
     for (const Light& l : lights_) {
         switch (l.type) {
             case LightType::Rect: grow(l.rect.corner + l.rect.edge_u + l.rect.edge_v); grow(l.rect.corner); break;
-            case LightType::Ellipse: grow(l.ellipse.center); break;
+            case LightType::Ellipse:
+                for (double a : {-1.0, 1.0})
+                    for (double b : {-1.0, 1.0})
+                        grow(l.ellipse.center + l.ellipse.axis_a * a + l.ellipse.axis_b * b);
+                break;
             case LightType::Point:
-            case LightType::Spot: grow(l.position); break;
+            case LightType::Spot: {
+                const double r = std::sqrt(dot(l.position, l.position)) + l.radius;
+                r2 = std::max(r2, r * r);
+                break;
+            }
             default: break;
         }
     }
     bounding_radius_ = std::sqrt(r2);
 
     // Emissive meshes emit from both sides, as Cycles' Emission shader does.
-    for (const EmissiveTriangle& t : geometry_.emissive_triangles())
-        lights_.push_back(make_triangle_light(t.vertices[0], t.vertices[1], t.vertices[2],
-                                              t.radiance, /*two_sided=*/true));
+    for (const EmissiveTriangle& t : geometry_.emissive_triangles()) {
+        Light light = make_triangle_light(t.vertices[0], t.vertices[1], t.vertices[2],
+                                          t.radiance, /*two_sided=*/true);
+        light.mesh = t.mesh;
+        light.mesh_triangle = t.triangle;
+        lights_.push_back(light);
+    }
     committed_ = true;
 }
 

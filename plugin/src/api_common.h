@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mis/strategy.h"
 #include "omis/omis.h"
 
 namespace omis::api {
@@ -60,6 +61,9 @@ T* checked(T* handle, const char* what) {
     if (!handle) throw std::invalid_argument(std::string(what) + ": handle is NULL");
     return handle;
 }
+
+// The core strategy for a C enum value; std::invalid_argument outside the enum.
+omis::Strategy to_core(OMISStrategy strategy);
 
 inline void retain(RefCounted* object) { object->references.fetch_add(1); }
 inline void release(RefCounted* object) {

@@ -22,9 +22,7 @@ struct OMISEstimatorImpl : RefCounted {
     }
 };
 
-namespace {
-
-omis::Strategy to_core(OMISStrategy s) {
+omis::Strategy omis::api::to_core(OMISStrategy s) {
     switch (s) {
         case OMIS_STRATEGY_BALANCE: return omis::Strategy::Balance;
         case OMIS_STRATEGY_POWER: return omis::Strategy::Power;
@@ -35,8 +33,6 @@ omis::Strategy to_core(OMISStrategy s) {
     }
     throw std::invalid_argument("strategy: unknown value " + std::to_string(int(s)));
 }
-
-}  // namespace
 
 OMIS_API bool omisParseStrategy(const char* name, OMISStrategy* strategy) {
     return guarded(false, [&] {

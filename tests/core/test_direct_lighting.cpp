@@ -439,3 +439,27 @@ TEST_CASE("bad settings and lights are refused with a clear message", "[direct]"
     CHECK_FALSE(parse_technique("uniform/sphere").has_value());
     CHECK_FALSE(parse_technique("random/area").has_value());
 }
+
+TEST_CASE("an emissive mesh lights receivers and does not shadow itself", "[direct]") {
+    // A two-triangle emissive quad at height h over receivers at several
+    // heights and offsets; mesh emission is two-sided (Cycles).
+    for (double h : {1.0, 0.3, 5.0}) {
+        Scene scene;
+        scene.add_mesh(std::vector<Vec3>{{-0.5, -0.5, h}, {0.5, -0.5, h}, {0.5, 0.5, h},
+                                         {-0.5, 0.5, h}},
+                       {{0, 1, 2}, {0, 2, 3}}, Vec3(2, 2, 2));
+        scene.commit();
+        for (const Vec3& x : {Vec3(0, 0, 0), Vec3(0.3, -0.2, 0), Vec3(1.5, 0, 0), Vec3(7, 3, -2)}) {
+            const Vec3 n(0, 0, 1);
+            const double exact =
+                2 * polygon_irradiance(x, n, {{-0.5, -0.5, h}, {0.5, -0.5, h}, {0.5, 0.5, h},
+                                              {-0.5, 0.5, h}}) / kPi;
+            DirectLightingStats stats;
+            const Estimate e = light_copies(scene, x, n, {"bsdf", "uniform/solid-angle"}, {4, 8}, 4,
+                                            Strategy::Balance, 9, &stats);
+            INFO("h " << h << " x " << x.x << "," << x.y << "," << x.z << " exact " << exact);
+            CHECK(stats.rays_traced > 0);
+            CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error + resolution(exact, 48));
+        }
+    }
+}

@@ -109,4 +109,136 @@ OMIS_API bool omisEstimatorGetResult(OMISEstimator estimator, double* estimate,
 /* Forgets every sample; the settings stay. */
 OMIS_API void omisResetEstimator(OMISEstimator estimator);
 
+/* ---- Scenes and direct lighting (SPEC §3–§4) --------------------------- */
+
+/* A scene: triangle meshes (occluders, and emitters when they carry emission)
+ * plus lights in physical units (Blender 3.4 / Cycles conventions, SPEC §4).
+ * Add meshes and lights, commit, then query; adding after commit and querying
+ * before it are OMIS_ERROR_INVALID_OPERATION. Build a scene from one thread;
+ * a committed scene is read-only and may be lit from several threads at once.
+ * All positions are world space in metres, all vectors (x, y, z). */
+typedef struct OMISSceneImpl* OMISScene;
+
+/* Returned instead of a mesh or light id when a call fails. */
+#define OMIS_INVALID_ID 0xFFFFFFFFu
+
+typedef enum OMISDataType {
+    OMIS_DATA_FLOAT32 = 1,
+    OMIS_DATA_FLOAT64 = 2
+} OMISDataType;
+
+/* Progress of a long call: fraction done in [0, 1]. Returning false cancels
+ * the call, which then fails with OMIS_ERROR_CANCELLED. May be called from any
+ * thread, several threads at once, and not necessarily with increasing
+ * fractions; it must be thread-safe and quick. */
+typedef bool (*OMISProgressFunction)(void* user, double fraction);
+
+OMIS_API OMISScene omisNewScene(void);
+OMIS_API void omisRetainScene(OMISScene scene);
+OMIS_API void omisReleaseScene(OMISScene scene);
+
+/* Adds a triangle mesh; returns its id (0, 1, ...) or OMIS_INVALID_ID.
+ * Every array is read during the call only (the scene keeps its own copy).
+ *   vertices:      numVertices rows of 3 scalars of `type`, vertexByteStride
+ *                  bytes apart (0 = tightly packed)
+ *   triangles:     numTriangles rows of 3 vertex indices, tightly packed;
+ *                  counter-clockwise seen from the front
+ *   cornerNormals: NULL, or 3·numTriangles rows of 3 scalars of `type`,
+ *                  tightly packed: shading normals per triangle corner
+ *   cornerUVs:     NULL, or 3·numTriangles rows of 2 scalars of `type`
+ *   emission:      NULL, or RGB radiance W/(m² sr): the mesh then also emits
+ *                  (two-sided, one triangle light per triangle) */
+OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices, OMISDataType type,
+                                       size_t vertexByteStride, size_t numVertices,
+                                       const uint32_t* triangles, size_t numTriangles,
+                                       const void* cornerNormals, const void* cornerUVs,
+                                       const float* emission);
+
+/* Lights; each returns the light id or OMIS_INVALID_ID. RGB triples are
+ * radiance W/(m² sr) for area lights and the world, intensity W/sr for point
+ * and spot lights, irradiance W/m² for the sun. Angles are in radians.
+ * `spread` is Blender's area-light spread (π: no effect). */
+
+/* Rectangle corner + [0,1]·edgeU + [0,1]·edgeV (perpendicular edges);
+ * one-sided lights emit toward cross(edgeU, edgeV). */
+OMIS_API unsigned int omisSceneAddRectLight(OMISScene scene, const double corner[3],
+                                            const double edgeU[3], const double edgeV[3],
+                                            const double radiance[3], bool twoSided,
+                                            double spread);
+/* Ellipse (or disk) center + a·axisA + b·axisB, a² + b² ≤ 1, perpendicular
+ * semi-axes; one-sided lights emit toward cross(axisA, axisB). */
+OMIS_API unsigned int omisSceneAddEllipseLight(OMISScene scene, const double center[3],
+                                               const double axisA[3], const double axisB[3],
+                                               const double radiance[3], bool twoSided,
+                                               double spread);
+/* radius 0: a delta light (one shadow ray); radius > 0: a disk facing the
+ * receiver of radiance intensity/(π radius²). */
+OMIS_API unsigned int omisSceneAddPointLight(OMISScene scene, const double position[3],
+                                             const double intensity[3], double radius);
+/* spotSize: full cone angle; spotBlend in [0, 1] (Blender's smoothstep). */
+OMIS_API unsigned int omisSceneAddSpotLight(OMISScene scene, const double position[3],
+                                            const double direction[3],
+                                            const double intensity[3], double radius,
+                                            double spotSize, double spotBlend);
+/* direction: the way the light travels; angle: full angular diameter (0 =
+ * delta light). */
+OMIS_API unsigned int omisSceneAddSunLight(OMISScene scene, const double direction[3],
+                                           const double irradiance[3], double angle);
+/* Constant radiance from every direction; a second call replaces the first. */
+OMIS_API unsigned int omisSceneSetWorld(OMISScene scene, const double radiance[3]);
+/* Blender's cycles.cast_shadow and cycles.use_multiple_importance_sampling
+ * (false: the `bsdf` technique does not see the light). Before commit only. */
+OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
+                                     bool visibleToBsdf);
+
+/* Builds the acceleration structure and the emissive-mesh lights. A second
+ * commit does nothing. */
+OMIS_API void omisCommitScene(OMISScene scene);
+
+/* Techniques (SPEC §3) are named in one comma-separated string, for example
+ * "bsdf,unoccluded/solid-angle"; `samples` then holds one count per name
+ * (samples per round, >= 0). NULL or "" chooses the effect plan's default
+ * techniques and sample counts for the scene, and samples is ignored. */
+
+/* The effect plan of a committed scene for these techniques, as text. Writes
+ * at most bufferSize bytes including a terminating NUL (buffer may be NULL
+ * when bufferSize is 0) and returns the full length without the NUL, so a
+ * call with bufferSize 0 queries the size. Returns 0 on error. */
+OMIS_API size_t omisGetEffectPlan(OMISScene scene, const char* techniques, const int* samples,
+                                  char* buffer, size_t bufferSize);
+
+/* What a direct-lighting call did. */
+typedef struct OMISDirectLightingStats {
+    uint64_t points;
+    uint64_t samples;        /* directions drawn */
+    uint64_t raysTraced;     /* shadow and BSDF rays */
+    uint64_t misSystems;     /* per-point MIS estimators built */
+    uint64_t pdfEvaluations; /* light-technique pdf evaluations */
+    double seconds;          /* wall-clock time */
+} OMISDirectLightingStats;
+
+/* E_direct/π per RGB channel at `count` shading points of a committed scene
+ * (SPEC §3): what Cycles' Diffuse bake with only Direct writes.
+ *   points, normals: count rows of 3 doubles, tightly packed; normals face the
+ *                    side that receives light (normalised here; not zero)
+ *   techniques, samples: as above; rounds >= 1 (R, SPEC §1)
+ *   strategy, beta, cutoff: the MIS combination (beta: power heuristic,
+ *                    default 2; cutoff: cutoff heuristic, default 0.1)
+ *   seed:            results are a function of the seed only, not of the
+ *                    number of threads
+ *   value:           count rows of 3 doubles written: the estimates
+ *   variance:        NULL, or count rows of 3 doubles written: their
+ *                    estimated variances
+ *   stats:           NULL, or filled in (also when cancelled)
+ *   progress, user:  NULL, or called now and then (any thread, see
+ *                    OMISProgressFunction); returning false cancels
+ * Arrays are read/written during the call only. count 0 does nothing and
+ * succeeds. Returns false on error or cancellation (outputs then incomplete). */
+OMIS_API bool omisDirectLighting(OMISScene scene, const double* points, const double* normals,
+                                 size_t count, const char* techniques, const int* samples,
+                                 int rounds, OMISStrategy strategy, double beta, double cutoff,
+                                 uint64_t seed, double* value, double* variance,
+                                 OMISDirectLightingStats* stats,
+                                 OMISProgressFunction progress, void* user);
+
 #endif /* OMIS_H */

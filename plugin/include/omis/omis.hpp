@@ -52,5 +52,6 @@ private:
 };
 
 using EstimatorRef = Ref<OMISEstimator, omisRetainEstimator, omisReleaseEstimator>;
+using SceneRef = Ref<OMISScene, omisRetainScene, omisReleaseScene>;
 
 }  // namespace omis::capi

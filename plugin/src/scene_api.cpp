@@ -1,0 +1,394 @@
+// C ABI of scenes and direct lighting (omis.h, "Scenes and direct lighting").
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "api_common.h"
+#include "render/direct_lighting.h"
+#include "render/effect_plan.h"
+#include "render/scene.h"
+#include "render/techniques.h"
+
+using namespace omis::api;
+
+struct OMISSceneImpl : RefCounted {
+    omis::Scene scene;
+    std::mutex build_mutex;              // serialises adds and commit
+    std::atomic<bool> committed{false};  // set once commit has finished
+
+    // Adds run under the lock, and only before commit.
+    std::unique_lock<std::mutex> lock_for_build(const char* what) {
+        std::unique_lock<std::mutex> lock(build_mutex);
+        if (committed.load())
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           std::string(what) +
+                               ": the scene is already committed (add meshes "
+                               "and lights before omisCommitScene)");
+        return lock;
+    }
+    const omis::Scene& committed_scene(const char* what) const {
+        if (!committed.load())
+            throw ApiError(
+                OMIS_ERROR_INVALID_OPERATION,
+                std::string(what) + ": scene not committed (call omisCommitScene first)");
+        return scene;
+    }
+};
+
+namespace {
+
+// Holds a reference for the duration of a call, so a concurrent release by
+// another thread cannot free the scene under it.
+struct ScopedRetain {
+    RefCounted* object;
+    explicit ScopedRetain(RefCounted* o) : object(o) { retain(o); }
+    ~ScopedRetain() { release(object); }
+    ScopedRetain(const ScopedRetain&) = delete;
+    ScopedRetain& operator=(const ScopedRetain&) = delete;
+};
+
+omis::Vec3 vec3(const double* v, const char* name) {
+    checked(v, name);
+    return {v[0], v[1], v[2]};
+}
+
+std::size_t scalar_size(OMISDataType type) {
+    switch (type) {
+        case OMIS_DATA_FLOAT32:
+            return sizeof(float);
+        case OMIS_DATA_FLOAT64:
+            return sizeof(double);
+    }
+    throw std::invalid_argument("type: unknown data type " + std::to_string(int(type)) +
+                                " (OMIS_DATA_FLOAT32 or OMIS_DATA_FLOAT64)");
+}
+
+// A (rows, cols) scalar array for the core, over the caller's memory when it
+// is packed and aligned, else over a packed copy kept in `storage`.
+omis::ScalarArray scalar_array(const void* data, OMISDataType type,
+                               std::size_t byte_stride, std::size_t rows,
+                               std::size_t cols, std::vector<unsigned char>& storage) {
+    const std::size_t scalar = scalar_size(type);
+    const std::size_t row_bytes = scalar * cols;
+    if (byte_stride == 0) byte_stride = row_bytes;
+    const bool direct =
+        byte_stride == row_bytes && reinterpret_cast<std::uintptr_t>(data) % scalar == 0;
+    const void* packed = data;
+    if (!direct) {
+        // Copy with memcpy: strided or unaligned rows cannot be read in place.
+        storage.resize(rows * row_bytes);
+        const auto* in = static_cast<const unsigned char*>(data);
+        for (std::size_t r = 0; r < rows; ++r)
+            std::memcpy(storage.data() + r * row_bytes, in + r * byte_stride, row_bytes);
+        packed = storage.data();
+    }
+    if (type == OMIS_DATA_FLOAT32)
+        return omis::ScalarArray::of(static_cast<const float*>(packed), rows, cols);
+    return omis::ScalarArray::of(static_cast<const double*>(packed), rows, cols);
+}
+
+// Adds a light built by a core factory under the build lock.
+template <class Make>
+unsigned int add_light(OMISScene scene, const char* what, Make&& make) {
+    return guarded<unsigned int>(OMIS_INVALID_ID, [&] {
+        auto* s = checked(scene, "scene");
+        const omis::Light light = make();  // validates before taking the lock
+        auto lock = s->lock_for_build(what);
+        return static_cast<unsigned int>(s->scene.add_light(light));
+    });
+}
+
+struct TechniqueChoice {
+    std::vector<omis::Technique> techniques;
+    std::vector<int> samples;
+};
+
+// Parses the comma-separated technique list (or takes the scene's default).
+TechniqueChoice choose_techniques(const omis::Scene& scene, const char* names,
+                                  const int* samples) {
+    TechniqueChoice choice;
+    if (!names || !*names) {
+        omis::default_techniques(scene, choice.techniques, choice.samples);
+        return choice;
+    }
+    const std::string list = names;
+    std::size_t begin = 0;
+    while (true) {
+        const std::size_t end = std::min(list.find(',', begin), list.size());
+        std::string name = list.substr(begin, end - begin);
+        const auto first = name.find_first_not_of(" \t");
+        name = first == std::string::npos
+                   ? std::string()
+                   : name.substr(first, name.find_last_not_of(" \t") - first + 1);
+        if (name.empty())
+            throw std::invalid_argument("techniques: empty name in the list '" + list +
+                                        "'");
+        const auto technique = omis::parse_technique(name);
+        if (!technique)
+            throw std::invalid_argument(
+                "techniques: unknown technique '" + name +
+                "' (bsdf, or <uniform|power|unoccluded>/<area|solid-angle|parallel>)");
+        choice.techniques.push_back(*technique);
+        if (end == list.size()) break;
+        begin = end + 1;
+    }
+    checked(samples, "samples");
+    for (std::size_t k = 0; k < choice.techniques.size(); ++k) {
+        if (samples[k] < 0)
+            throw std::invalid_argument("samples: entry " + std::to_string(k) + " (" +
+                                        choice.techniques[k].name() + ") is negative");
+        choice.samples.push_back(samples[k]);
+    }
+    return choice;
+}
+
+std::string fmt_row(const double* v) {
+    return "(" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
+           std::to_string(v[2]) + ")";
+}
+
+}  // namespace
+
+OMIS_API OMISScene omisNewScene(void) {
+    return guarded<OMISScene>(nullptr, [&] { return new OMISSceneImpl(); });
+}
+
+OMIS_API void omisRetainScene(OMISScene scene) {
+    guarded_void([&] { retain(checked(scene, "scene")); });
+}
+
+OMIS_API void omisReleaseScene(OMISScene scene) {
+    guarded_void([&] { release(checked(scene, "scene")); });
+}
+
+OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices,
+                                       OMISDataType type, size_t vertexByteStride,
+                                       size_t numVertices, const uint32_t* triangles,
+                                       size_t numTriangles, const void* cornerNormals,
+                                       const void* cornerUVs, const float* emission) {
+    return guarded<unsigned int>(OMIS_INVALID_ID, [&] {
+        auto* s = checked(scene, "scene");
+        const std::size_t scalar = scalar_size(type);
+        if (numVertices > 0) checked(vertices, "vertices");
+        if (numTriangles > 0) checked(triangles, "triangles");
+        if (vertexByteStride != 0 && vertexByteStride < 3 * scalar)
+            throw std::invalid_argument(
+                "vertexByteStride: " + std::to_string(vertexByteStride) +
+                " bytes is less than one vertex (" + std::to_string(3 * scalar) + ")");
+        // Sizes the core would refuse anyway; checked here so no product below overflows.
+        if (numVertices >= (std::size_t(1) << 32))
+            throw std::invalid_argument("numVertices: too many vertices for Embree");
+        if (numTriangles > (std::size_t(1) << 31))
+            throw std::invalid_argument("numTriangles: too many triangles for Embree");
+
+        std::vector<unsigned char> vertex_copy, normal_copy, uv_copy;
+        static const double no_vertex = 0;
+        omis::MeshInput in;
+        in.positions = numVertices > 0 ? scalar_array(vertices, type, vertexByteStride,
+                                                      numVertices, 3, vertex_copy)
+                                       : omis::ScalarArray::of(&no_vertex, 0, 3);
+        in.triangles.data = triangles;
+        in.triangles.rows = numTriangles;
+        in.triangles.cols = 3;
+        if (cornerNormals && numTriangles > 0)
+            in.normals =
+                scalar_array(cornerNormals, type, 0, 3 * numTriangles, 3, normal_copy);
+        if (cornerUVs && numTriangles > 0)
+            in.uvs = scalar_array(cornerUVs, type, 0, 3 * numTriangles, 2, uv_copy);
+        if (emission) in.emission = omis::Vec3{emission[0], emission[1], emission[2]};
+
+        auto lock = s->lock_for_build("omisSceneAddMesh");
+        return static_cast<unsigned int>(s->scene.add_mesh(in));
+    });
+}
+
+OMIS_API unsigned int omisSceneAddRectLight(OMISScene scene, const double corner[3],
+                                            const double edgeU[3], const double edgeV[3],
+                                            const double radiance[3], bool twoSided,
+                                            double spread) {
+    return add_light(scene, "omisSceneAddRectLight", [&] {
+        return omis::make_rect_light(vec3(corner, "corner"), vec3(edgeU, "edgeU"),
+                                     vec3(edgeV, "edgeV"), vec3(radiance, "radiance"),
+                                     twoSided, spread);
+    });
+}
+
+OMIS_API unsigned int omisSceneAddEllipseLight(OMISScene scene, const double center[3],
+                                               const double axisA[3],
+                                               const double axisB[3],
+                                               const double radiance[3], bool twoSided,
+                                               double spread) {
+    return add_light(scene, "omisSceneAddEllipseLight", [&] {
+        return omis::make_ellipse_light(vec3(center, "center"), vec3(axisA, "axisA"),
+                                        vec3(axisB, "axisB"), vec3(radiance, "radiance"),
+                                        twoSided, spread);
+    });
+}
+
+OMIS_API unsigned int omisSceneAddPointLight(OMISScene scene, const double position[3],
+                                             const double intensity[3], double radius) {
+    return add_light(scene, "omisSceneAddPointLight", [&] {
+        return omis::make_point_light(vec3(position, "position"),
+                                      vec3(intensity, "intensity"), radius);
+    });
+}
+
+OMIS_API unsigned int omisSceneAddSpotLight(OMISScene scene, const double position[3],
+                                            const double direction[3],
+                                            const double intensity[3], double radius,
+                                            double spotSize, double spotBlend) {
+    return add_light(scene, "omisSceneAddSpotLight", [&] {
+        return omis::make_spot_light(
+            vec3(position, "position"), vec3(direction, "direction"),
+            vec3(intensity, "intensity"), radius, spotSize, spotBlend);
+    });
+}
+
+OMIS_API unsigned int omisSceneAddSunLight(OMISScene scene, const double direction[3],
+                                           const double irradiance[3], double angle) {
+    return add_light(scene, "omisSceneAddSunLight", [&] {
+        return omis::make_sun_light(vec3(direction, "direction"),
+                                    vec3(irradiance, "irradiance"), angle);
+    });
+}
+
+OMIS_API unsigned int omisSceneSetWorld(OMISScene scene, const double radiance[3]) {
+    return add_light(scene, "omisSceneSetWorld",
+                     [&] { return omis::make_world_light(vec3(radiance, "radiance")); });
+}
+
+OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
+                                     bool visibleToBsdf) {
+    guarded_void([&] {
+        auto* s = checked(scene, "scene");
+        auto lock = s->lock_for_build("omisSceneSetLightFlags");
+        const std::size_t n = s->scene.lights().size();
+        if (light >= n)
+            throw std::invalid_argument("light: no light with id " +
+                                        std::to_string(light) + " (the scene has " +
+                                        std::to_string(n) + ")");
+        s->scene.set_light_flags(light, castShadow, visibleToBsdf);
+    });
+}
+
+OMIS_API void omisCommitScene(OMISScene scene) {
+    guarded_void([&] {
+        auto* s = checked(scene, "scene");
+        std::lock_guard<std::mutex> lock(s->build_mutex);
+        if (s->committed.load()) return;
+        s->scene.commit();
+        s->committed.store(true);
+    });
+}
+
+OMIS_API size_t omisGetEffectPlan(OMISScene scene, const char* techniques,
+                                  const int* samples, char* buffer, size_t bufferSize) {
+    return guarded<size_t>(0, [&] {
+        auto* s = checked(scene, "scene");
+        ScopedRetain hold(s);
+        if (bufferSize > 0) checked(buffer, "buffer");
+        const omis::Scene& sc = s->committed_scene("omisGetEffectPlan");
+        const TechniqueChoice choice = choose_techniques(sc, techniques, samples);
+        const std::string text =
+            omis::plan_effects(sc, choice.techniques, choice.samples).to_string();
+        if (bufferSize > 0) {
+            const std::size_t n = std::min(text.size(), bufferSize - 1);
+            std::memcpy(buffer, text.data(), n);
+            buffer[n] = '\0';
+        }
+        return text.size();
+    });
+}
+
+OMIS_API bool omisDirectLighting(OMISScene scene, const double* points,
+                                 const double* normals, size_t count,
+                                 const char* techniques, const int* samples, int rounds,
+                                 OMISStrategy strategy, double beta, double cutoff,
+                                 uint64_t seed, double* value, double* variance,
+                                 OMISDirectLightingStats* stats,
+                                 OMISProgressFunction progress, void* user) {
+    return guarded(false, [&] {
+        auto* s = checked(scene, "scene");
+        ScopedRetain hold(s);
+        if (stats) *stats = OMISDirectLightingStats{};
+        const omis::Scene& sc = s->committed_scene("omisDirectLighting");
+
+        omis::DirectLightingSettings settings;
+        TechniqueChoice choice = choose_techniques(sc, techniques, samples);
+        settings.techniques = std::move(choice.techniques);
+        settings.samples = std::move(choice.samples);
+        if (rounds < 1)
+            throw std::invalid_argument("rounds: must be at least 1, got " +
+                                        std::to_string(rounds));
+        settings.rounds = rounds;
+        settings.strategy = to_core(strategy);
+        if (!(beta > 0) || !std::isfinite(beta))
+            throw std::invalid_argument("beta: must be a positive finite number");
+        if (!(cutoff >= 0 && cutoff <= 1))
+            throw std::invalid_argument("cutoff: must lie in [0, 1]");
+        settings.options.beta = beta;
+        settings.options.cutoff = cutoff;
+        settings.seed = seed;
+        if (count == 0) return true;
+
+        checked(points, "points");
+        checked(normals, "normals");
+        checked(value, "value");
+        if (count > std::numeric_limits<std::size_t>::max() / (3 * sizeof(double)))
+            throw std::invalid_argument("count: too many points");
+
+        // Validate, and normalise the normals into our own copy.
+        std::vector<double> unit(3 * count);
+        for (std::size_t i = 0; i < count; ++i) {
+            const double* p = points + 3 * i;
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+                throw std::invalid_argument("points: point " + std::to_string(i) +
+                                            " is not finite: " + fmt_row(p));
+            const double* n = normals + 3 * i;
+            if (!std::isfinite(n[0]) || !std::isfinite(n[1]) || !std::isfinite(n[2]))
+                throw std::invalid_argument("normals: normal " + std::to_string(i) +
+                                            " is not finite: " + fmt_row(n));
+            // Scale first so neither tiny nor huge components under/overflow.
+            const double scale =
+                std::max({std::abs(n[0]), std::abs(n[1]), std::abs(n[2])});
+            if (!(scale > 0))
+                throw std::invalid_argument("normals: normal " + std::to_string(i) +
+                                            " has zero length");
+            const double x = n[0] / scale, y = n[1] / scale, z = n[2] / scale;
+            const double len = std::sqrt(x * x + y * y + z * z);
+            unit[3 * i + 0] = x / len;
+            unit[3 * i + 1] = y / len;
+            unit[3 * i + 2] = z / len;
+        }
+        std::vector<double> scratch;
+        if (!variance) {
+            scratch.resize(3 * count);
+            variance = scratch.data();
+        }
+
+        omis::ProgressFunction report;
+        if (progress) report = [&](double fraction) { return progress(user, fraction); };
+        const omis::DirectLightingStats r = omis::direct_lighting(
+            sc, points, unit.data(), count, settings, value, variance, report);
+        if (stats) {
+            stats->points = r.points;
+            stats->samples = r.samples;
+            stats->raysTraced = r.rays_traced;
+            stats->misSystems = r.mis_systems;
+            stats->pdfEvaluations = r.pdf_evaluations;
+            stats->seconds = r.seconds;
+        }
+        if (r.cancelled)
+            throw ApiError(OMIS_ERROR_CANCELLED,
+                           "omisDirectLighting: cancelled by the progress callback");
+        return true;
+    });
+}
