@@ -6,6 +6,8 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <algorithm>
+#include <functional>
 #include <condition_variable>
 #include <cstring>
 #include <exception>
@@ -517,7 +519,7 @@ std::string effect_plan(const Scene& scene, const py::handle& techniques, const 
 }
 
 // State shared by the calling thread and the worker running the native call.
-struct LightingRun {
+struct NativeRun {
     std::mutex mutex;
     std::condition_variable done_cv;
     bool done = false;
@@ -530,59 +532,23 @@ struct LightingRun {
 
 // OMISProgressFunction: any thread; records the furthest fraction, answers the cancel flag.
 bool on_progress(void* user, double fraction) {
-    auto* run = static_cast<LightingRun*>(user);
+    auto* run = static_cast<NativeRun*>(user);
     double seen = run->fraction.load();
     while (fraction > seen && !run->fraction.compare_exchange_weak(seen, fraction)) {
     }
     return !run->cancel.load();
 }
 
-py::object direct_lighting(const Scene& scene, const py::handle& points_in,
-                           const py::handle& normals_in, const py::handle& techniques,
-                           const py::handle& samples, int rounds, const std::string& strategy_name,
-                           const py::handle& seed_in, double beta, double cutoff,
-                           const py::object& progress, bool return_stats) {
-    auto points = as_float_array(points_in, "points");
-    auto normals = as_float_array(normals_in, "normals");
-    if (points.ndim() != 2 || points.shape(1) != 3)
-        bad("points", "expected shape (P, 3), got " + shape_of(points));
-    const py::ssize_t P = points.shape(0);
-    if (normals.ndim() != 2 || normals.shape(0) != P || normals.shape(1) != 3)
-        bad("normals", "expected shape (" + std::to_string(P) + ", 3) like points, got " +
-                           shape_of(normals));
-    const TechniqueArgs t = technique_args(techniques, samples);
-    OMISStrategy strategy;
-    if (!omisParseStrategy(strategy_name.c_str(), &strategy))
-        bad("strategy", "unknown strategy '" + strategy_name +
-                            "' (balance, power, maximum, cutoff, optimal-direct, "
-                            "optimal-progressive)");
-    std::uint64_t seed;
-    {
-        py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
-        if (!index) {
-            PyErr_Clear();
-            bad("seed", "expected a non-negative integer");
-        }
-        seed = PyLong_AsUnsignedLongLong(index.ptr());
-        if (PyErr_Occurred()) {
-            PyErr_Clear();
-            bad("seed", "expected an integer in [0, 2**64)");
-        }
-    }
-    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-        bad("progress", "expected a callable taking the fraction done");
-
-    py::array_t<double> value({P, py::ssize_t(3)}), variance({P, py::ssize_t(3)});
-    OMISDirectLightingStats stats{};
-    LightingRun run;
-
-    // The native call runs on a worker; this thread wakes every 50 ms to report
-    // progress and to notice Ctrl-C, either of which may set the cancel flag.
+// Runs a native call on a worker thread while this thread, holding the GIL
+// only when awake, wakes every 50 ms to report progress and notice Ctrl-C;
+// either may set the cancel flag the native progress function answers.
+// Raises KeyboardInterrupt, what progress raised, omis.Cancelled, or the
+// native error; on success calls progress(1.0).
+void run_interruptible(const char* what, const py::object& progress,
+                       const std::function<bool(NativeRun&)>& call) {
+    NativeRun run;
     std::thread worker([&] {
-        run.ok = omisDirectLighting(scene.get(), points.data(), normals.data(), size_t(P),
-                                    t.names.c_str(), t.samples_ptr(), rounds, strategy, beta,
-                                    cutoff, seed, value.mutable_data(), variance.mutable_data(),
-                                    &stats, on_progress, &run);
+        run.ok = call(run);
         if (!run.ok) {
             const char* message = nullptr;
             run.code = omisGetError(&message);  // errors are per thread: read them here
@@ -624,9 +590,55 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
     worker.join();  // already finished: `done` was set last
 
     if (interruption) std::rethrow_exception(interruption);
-    if (stopped_by_callback) raise_cancelled("direct_lighting: cancelled by the progress callback");
+    if (stopped_by_callback)
+        raise_cancelled(std::string(what) + ": cancelled by the progress callback");
     if (!run.ok) raise_error(run.code, run.message);
     if (!progress.is_none()) progress(1.0);
+}
+
+py::object direct_lighting(const Scene& scene, const py::handle& points_in,
+                           const py::handle& normals_in, const py::handle& techniques,
+                           const py::handle& samples, int rounds, const std::string& strategy_name,
+                           const py::handle& seed_in, double beta, double cutoff,
+                           const py::object& progress, bool return_stats) {
+    auto points = as_float_array(points_in, "points");
+    auto normals = as_float_array(normals_in, "normals");
+    if (points.ndim() != 2 || points.shape(1) != 3)
+        bad("points", "expected shape (P, 3), got " + shape_of(points));
+    const py::ssize_t P = points.shape(0);
+    if (normals.ndim() != 2 || normals.shape(0) != P || normals.shape(1) != 3)
+        bad("normals", "expected shape (" + std::to_string(P) + ", 3) like points, got " +
+                           shape_of(normals));
+    const TechniqueArgs t = technique_args(techniques, samples);
+    OMISStrategy strategy;
+    if (!omisParseStrategy(strategy_name.c_str(), &strategy))
+        bad("strategy", "unknown strategy '" + strategy_name +
+                            "' (balance, power, maximum, cutoff, optimal-direct, "
+                            "optimal-progressive)");
+    std::uint64_t seed;
+    {
+        py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
+        if (!index) {
+            PyErr_Clear();
+            bad("seed", "expected a non-negative integer");
+        }
+        seed = PyLong_AsUnsignedLongLong(index.ptr());
+        if (PyErr_Occurred()) {
+            PyErr_Clear();
+            bad("seed", "expected an integer in [0, 2**64)");
+        }
+    }
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        bad("progress", "expected a callable taking the fraction done");
+
+    py::array_t<double> value({P, py::ssize_t(3)}), variance({P, py::ssize_t(3)});
+    OMISDirectLightingStats stats{};
+    run_interruptible("direct_lighting", progress, [&](NativeRun& run) {
+        return omisDirectLighting(scene.get(), points.data(), normals.data(), size_t(P),
+                                  t.names.c_str(), t.samples_ptr(), rounds, strategy, beta,
+                                  cutoff, seed, value.mutable_data(), variance.mutable_data(),
+                                  &stats, on_progress, &run);
+    });
     if (!return_stats) return py::make_tuple(value, variance);
     py::dict d;
     d["points"] = stats.points;
@@ -637,6 +649,218 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
     d["seconds"] = stats.seconds;
     d["plan"] = plan_text(scene, t);
     return py::make_tuple(value, variance, d);
+}
+
+// ---- Baking ---------------------------------------------------------------
+
+// A finished bake: arrays with row 0 at the bottom (Blender's Image.pixels
+// order), statistics, and atomic file writers.
+class BakeResult {
+public:
+    BakeResult(OMISBakeResult result, bool lightmap) : ref_(result), lightmap_(lightmap) {
+        if (!omisGetBakeResultSize(ref_.get(), &width_, &height_)) raise_pending_error();
+    }
+
+    py::array value() const { return array("value", 3); }
+    py::array noise() const { return array("noise", 1); }
+    py::array mask() const { return array("mask", 1); }
+
+    py::dict stats() const {
+        OMISBakeStats s{};
+        if (!omisGetBakeResultStats(ref_.get(), &s)) raise_pending_error();
+        static const char* status[] = {"complete", "time budget reached", "noise target reached"};
+        py::dict d;
+        d["status"] = status[std::clamp(s.status, 0, 2)];
+        d["seconds"] = s.seconds;
+        d["samples"] = s.samples;
+        d["rays_traced"] = s.raysTraced;
+        d["samples_per_texel"] = s.samplesPerTexel;
+        d["mean_relative_error"] = s.meanRelativeError;
+        d["max_relative_error"] = s.maxRelativeError;
+        d["passes"] = s.passes;
+        d["texels"] = s.texels;
+        d["covered"] = s.covered;
+        d["degenerate_uv_triangles"] = s.degenerateUvTriangles;
+        const size_t n = omisGetBakeResultPlan(ref_.get(), nullptr, 0);
+        std::string plan(n + 1, '\0');
+        omisGetBakeResultPlan(ref_.get(), &plan[0], plan.size());
+        plan.resize(n);
+        d["plan"] = plan;
+        return d;
+    }
+
+    void write_exr(const std::string& path) const {
+        bool ok;
+        {
+            py::gil_scoped_release release;
+            ok = omisWriteBakeResultEXR(ref_.get(), path.c_str());
+        }
+        if (!ok) raise_pending_error();
+    }
+
+    void write_png(const std::string& path, const std::string& view, const std::string& display,
+                   double exposure) const {
+        bool ok;
+        {
+            py::gil_scoped_release release;
+            ok = omisWriteBakeResultPNG(ref_.get(), path.c_str(), view.c_str(), display.c_str(),
+                                        exposure);
+        }
+        if (!ok) raise_pending_error();
+    }
+
+    std::string repr() const {
+        return "<omis.BakeResult " + std::to_string(width_) + "×" + std::to_string(height_) +
+               (lightmap_ ? " lightmap>" : " points>");
+    }
+
+private:
+    py::array array(const char* name, int channels) const {
+        const float* data = omisGetBakeResultData(ref_.get(), name);
+        if (!data) raise_pending_error();
+        std::vector<py::ssize_t> shape;
+        if (lightmap_) shape = {height_, width_};
+        else shape = {width_};
+        if (channels > 1) shape.push_back(channels);
+        py::array_t<float> out(shape);
+        std::memcpy(out.mutable_data(), data, sizeof(float) * size_t(out.size()));
+        return std::move(out);
+    }
+
+    omis::capi::BakeResultRef ref_;
+    bool lightmap_;
+    int width_ = 0, height_ = 0;
+};
+
+std::uint64_t seed_value(const py::handle& seed_in) {
+    py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
+    if (!index) {
+        PyErr_Clear();
+        bad("seed", "expected a non-negative integer");
+    }
+    const std::uint64_t seed = PyLong_AsUnsignedLongLong(index.ptr());
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        bad("seed", "expected an integer in [0, 2**64)");
+    }
+    return seed;
+}
+
+struct BakeOptions {
+    py::object techniques, counts;
+    long long samples;
+    std::string strategy;
+    double beta, cutoff;
+    py::object time_budget, noise_target;
+    py::object seed;
+    bool smooth_normals;
+    py::object progress;
+};
+
+BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
+                    int height, int margin, const BakeOptions& o) {
+    omis::capi::BakeRef bake(omisNewBake(scene.get(), target, mesh));
+    if (!bake) raise_pending_error();
+    OMISBake b = bake.get();
+    auto check = [] {
+        const char* message = nullptr;
+        const OMISError code = omisGetError(&message);
+        if (code != OMIS_ERROR_NONE) raise_error(code, message ? message : "bake: error");
+    };
+    if (target == OMIS_BAKE_LIGHTMAP) {
+        if (width < 1 || height < 1)
+            bad("width, height", "must be positive, got " + std::to_string(width) + "×" +
+                                     std::to_string(height));
+        omisSetBakeInt(b, "width", width);
+        omisSetBakeInt(b, "height", height);
+        if (margin < 0) bad("margin", "must not be negative");
+        omisSetBakeInt(b, "margin", margin);
+    }
+    if (o.samples < 1) bad("samples", "the sample budget must be at least 1");
+    omisSetBakeInt(b, "samples", o.samples);
+    omisSetBakeInt(b, "seed", std::int64_t(seed_value(o.seed)));
+    omisSetBakeInt(b, "smoothNormals", o.smooth_normals);
+    omisSetBakeString(b, "strategy", o.strategy.c_str());
+    omisSetBakeFloat(b, "beta", o.beta);
+    omisSetBakeFloat(b, "cutoff", o.cutoff);
+    if (!o.time_budget.is_none()) {
+        const double t = o.time_budget.cast<double>();
+        if (!(t > 0) || !std::isfinite(t)) bad("time_budget", "expected seconds > 0, or None");
+        omisSetBakeFloat(b, "timeBudget", t);
+    }
+    if (!o.noise_target.is_none()) {
+        const double t = o.noise_target.cast<double>();
+        if (!(t > 0) || !std::isfinite(t))
+            bad("noise_target", "expected a relative standard error > 0, or None");
+        omisSetBakeFloat(b, "noiseTarget", t);
+    }
+    if (o.techniques.is_none()) {
+        if (!o.counts.is_none())
+            bad("counts", "given without techniques (techniques=None lets the effect plan "
+                          "choose techniques and counts)");
+    } else {
+        // One count per technique per round, 1 each unless given.
+        py::object counts = o.counts;
+        if (counts.is_none()) {
+            std::size_t n;
+            if (py::isinstance<py::str>(o.techniques)) {
+                const std::string list = o.techniques.cast<std::string>();
+                n = 1 + std::count(list.begin(), list.end(), ',');
+            } else {
+                n = py::len(o.techniques);
+            }
+            py::array_t<int> ones(static_cast<py::ssize_t>(n));
+            std::fill(ones.mutable_data(), ones.mutable_data() + n, 1);
+            counts = std::move(ones);
+        }
+        TechniqueArgs t;
+        try {
+            t = technique_args(o.techniques, counts);
+        } catch (const py::value_error& e) {
+            // technique_args names `samples`; here the per-round counts are `counts`.
+            std::string message = e.what();
+            if (message.rfind("samples:", 0) == 0) message = "counts:" + message.substr(8);
+            throw py::value_error(message);
+        }
+        omisSetBakeString(b, "techniques", t.names.c_str());
+        omisSetBakeCounts(b, t.samples.data(), int(t.samples.size()));
+    }
+    check();
+    omisCommitBake(b);
+    check();
+
+    OMISBakeResult result = nullptr;
+    run_interruptible("bake", o.progress, [&](NativeRun& run) {
+        omisSetBakeProgressFunction(b, on_progress, &run);
+        result = omisExecuteBake(b);
+        return result != nullptr;
+    });
+    return BakeResult(result, target == OMIS_BAKE_LIGHTMAP);
+}
+
+BakeResult bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
+                   const py::object& techniques, const py::object& counts, long long samples,
+                   const std::string& strategy, double beta, double cutoff,
+                   const py::object& time_budget, const py::object& noise_target, int margin,
+                   const py::object& seed, bool smooth_normals, const py::object& progress) {
+    return run_bake(scene, mesh, OMIS_BAKE_LIGHTMAP, width, height, margin,
+                    {techniques, counts, samples, strategy, beta, cutoff, time_budget,
+                     noise_target, seed, smooth_normals, progress});
+}
+
+BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::string& domain,
+                         const py::object& techniques, const py::object& counts,
+                         long long samples, const std::string& strategy, double beta,
+                         double cutoff, const py::object& time_budget,
+                         const py::object& noise_target, const py::object& seed,
+                         bool smooth_normals, const py::object& progress) {
+    OMISBakeTarget target;
+    if (domain == "POINT") target = OMIS_BAKE_VERTICES;
+    else if (domain == "CORNER") target = OMIS_BAKE_CORNERS;
+    else bad("domain", "expected 'POINT' or 'CORNER', got '" + domain + "'");
+    return run_bake(scene, mesh, target, 0, 0, 0,
+                    {techniques, counts, samples, strategy, beta, cutoff, time_budget,
+                     noise_target, seed, smooth_normals, progress});
 }
 
 }  // namespace
@@ -741,4 +965,44 @@ raises omis.Cancelled. Ctrl-C stops it too (KeyboardInterrupt).
 Returns (value, variance), (P, 3) float64 arrays, plus a stats dict (points,
 samples, rays_traced, mis_systems, pdf_evaluations, seconds, plan) with
 return_stats=True.)doc");
+
+    py::class_<BakeResult>(m, "BakeResult",
+                           "A finished bake: value, noise and mask arrays (row 0 at the bottom, "
+                           "as Blender's Image.pixels), stats, and atomic file writers.")
+        .def_property_readonly("value", &BakeResult::value,
+                               "E_direct/π, float32 (H, W, 3), or (count, 3) for vertex bakes")
+        .def_property_readonly("noise", &BakeResult::noise,
+                               "estimated relative standard error per texel")
+        .def_property_readonly("mask", &BakeResult::mask, "1 where baked, 0 margin or empty")
+        .def_property_readonly("stats", &BakeResult::stats,
+                               "time, samples, rays, errors, passes, status and the effect plan")
+        .def("write_exr", &BakeResult::write_exr, py::arg("path"),
+             "Linear float EXR with channels R, G, B, noise, mask (atomic write).")
+        .def("write_png", &BakeResult::write_png, py::arg("path"), py::arg("view") = "Standard",
+             py::arg("display") = "sRGB", py::arg("exposure") = 0.0,
+             "8-bit PNG through Blender's OCIO view transform (atomic write).")
+        .def("__repr__", &BakeResult::repr);
+
+    m.def("bake_uv", &bake_uv, py::arg("scene"), py::arg("mesh"), py::arg("width"),
+          py::arg("height"), py::kw_only(), py::arg("techniques") = py::none(),
+          py::arg("counts") = py::none(), py::arg("samples") = 64,
+          py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
+          py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
+          py::arg("margin") = 16, py::arg("seed") = 0, py::arg("smooth_normals") = true,
+          py::arg("progress") = py::none(),
+          R"doc(Bakes E_direct/π into a mesh's UV lightmap of width × height texels.
+
+techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
+of each technique per round (1 each by default); samples: the sample budget per
+texel. time_budget (s) and noise_target (relative standard error) stop the bake
+earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
+raises omis.Cancelled / KeyboardInterrupt and nothing is returned.)doc");
+    m.def("bake_vertices", &bake_vertices, py::arg("scene"), py::arg("mesh"), py::kw_only(),
+          py::arg("domain") = "POINT", py::arg("techniques") = py::none(),
+          py::arg("counts") = py::none(), py::arg("samples") = 64,
+          py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
+          py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
+          py::arg("seed") = 0, py::arg("smooth_normals") = true, py::arg("progress") = py::none(),
+          R"doc(Bakes E_direct/π at a mesh's vertices (domain "POINT") or triangle corners
+("CORNER", 3 per triangle in triangle order), as bake_uv does for texels.)doc");
 }

@@ -1,8 +1,22 @@
 """omis — optimal multiple importance sampling for baked direct lighting.
 
 The native part (``omis._omis``) is a pybind11 module over the library's C ABI;
-this package re-exports it and adds the pure-Python helpers.
+this package re-exports it and adds the pure-Python helpers (``blender_units``
+for Blender/Cycles light conversions, ``demo`` for the built-in scene).
 """
-from ._omis import __version__, combine, STRATEGIES, Scene, direct_lighting, Cancelled
+from ._omis import (
+    STRATEGIES,
+    BakeResult,
+    Cancelled,
+    Scene,
+    __version__,
+    bake_uv,
+    bake_vertices,
+    combine,
+    direct_lighting,
+)
 
-__all__ = ["__version__", "combine", "STRATEGIES", "Scene", "direct_lighting", "Cancelled"]
+__all__ = [
+    "__version__", "combine", "STRATEGIES", "Scene", "direct_lighting", "Cancelled",
+    "bake_uv", "bake_vertices", "BakeResult",
+]

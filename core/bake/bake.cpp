@@ -182,24 +182,34 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     for (std::size_t i = 0; i < count; ++i)
         if (!covered(i)) state[i].done = true;
 
-    std::atomic<std::size_t> tiles_done{0};
+    // Progress counts shaded points; cancel is checked at every point so a
+    // request stops the bake within one point's work.
+    std::size_t to_shade = 0;
+    for (std::size_t i = 0; i < count; ++i) to_shade += covered(i);
+    const double total_work = double(std::max<std::size_t>(1, to_shade)) * max_passes;
+    std::atomic<std::size_t> shaded{0};
+    auto report_progress = [&] {
+        double fraction = double(shaded.load(std::memory_order_relaxed)) / total_work;
+        if (settings.time_budget > 0) fraction = std::max(fraction, elapsed() / settings.time_budget);
+        std::unique_lock<std::mutex> lock(report, std::try_to_lock);
+        if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
+    };
+
     int pass = 0;
     BakeStatus status = BakeStatus::Complete;
     for (; pass < max_passes; ++pass) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1),
                           [&](const tbb::blocked_range<std::size_t>& range) {
             for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
+                if (settings.time_budget > 0 && elapsed() >= settings.time_budget)
+                    out_of_time = true;
                 if (cancel.load(std::memory_order_relaxed) ||
                     out_of_time.load(std::memory_order_relaxed))
                     return;
-                if (settings.time_budget > 0 && elapsed() >= settings.time_budget) {
-                    out_of_time = true;
-                    return;
-                }
                 PointLighting& shader = shaders.local();
                 tile_points(tile, [&](std::size_t i) {
                     PointState& s = state[i];
-                    if (!covered(i) || s.done) return;
+                    if (!covered(i) || s.done || cancel.load(std::memory_order_relaxed)) return;
                     double value[3], variance[3];
                     const BakePoint& p = points[i];
                     shader.shade(i, std::uint64_t(pass), p.position, p.normal,
@@ -211,15 +221,9 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                     }
                     if (settings.noise_target > 0 && relative_error(s) <= settings.noise_target)
                         s.done = true;
+                    if (progress && (shaded.fetch_add(1, std::memory_order_relaxed) & 31) == 0)
+                        report_progress();
                 });
-                const std::size_t done = ++tiles_done;
-                if (progress) {
-                    double fraction = double(done) / double(tiles * max_passes);
-                    if (settings.time_budget > 0)
-                        fraction = std::max(fraction, elapsed() / settings.time_budget);
-                    std::unique_lock<std::mutex> lock(report, std::try_to_lock);
-                    if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
-                }
             }
         });
         if (cancel) {

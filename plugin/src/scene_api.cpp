@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "api_common.h"
+#include "scene_impl.h"
 #include "render/direct_lighting.h"
 #include "render/effect_plan.h"
 #include "render/scene.h"
@@ -19,41 +20,7 @@
 
 using namespace omis::api;
 
-struct OMISSceneImpl : RefCounted {
-    omis::Scene scene;
-    std::mutex build_mutex;              // serialises adds and commit
-    std::atomic<bool> committed{false};  // set once commit has finished
-
-    // Adds run under the lock, and only before commit.
-    std::unique_lock<std::mutex> lock_for_build(const char* what) {
-        std::unique_lock<std::mutex> lock(build_mutex);
-        if (committed.load())
-            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
-                           std::string(what) +
-                               ": the scene is already committed (add meshes "
-                               "and lights before omisCommitScene)");
-        return lock;
-    }
-    const omis::Scene& committed_scene(const char* what) const {
-        if (!committed.load())
-            throw ApiError(
-                OMIS_ERROR_INVALID_OPERATION,
-                std::string(what) + ": scene not committed (call omisCommitScene first)");
-        return scene;
-    }
-};
-
 namespace {
-
-// Holds a reference for the duration of a call, so a concurrent release by
-// another thread cannot free the scene under it.
-struct ScopedRetain {
-    RefCounted* object;
-    explicit ScopedRetain(RefCounted* o) : object(o) { retain(o); }
-    ~ScopedRetain() { release(object); }
-    ScopedRetain(const ScopedRetain&) = delete;
-    ScopedRetain& operator=(const ScopedRetain&) = delete;
-};
 
 omis::Vec3 vec3(const double* v, const char* name) {
     checked(v, name);
@@ -106,14 +73,10 @@ unsigned int add_light(OMISScene scene, const char* what, Make&& make) {
     });
 }
 
-struct TechniqueChoice {
-    std::vector<omis::Technique> techniques;
-    std::vector<int> samples;
-};
+}  // namespace
 
-// Parses the comma-separated technique list (or takes the scene's default).
-TechniqueChoice choose_techniques(const omis::Scene& scene, const char* names,
-                                  const int* samples) {
+TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const char* names,
+                                             const int* samples) {
     TechniqueChoice choice;
     if (!names || !*names) {
         omis::default_techniques(scene, choice.techniques, choice.samples);
@@ -149,6 +112,8 @@ TechniqueChoice choose_techniques(const omis::Scene& scene, const char* names,
     }
     return choice;
 }
+
+namespace {
 
 std::string fmt_row(const double* v) {
     return "(" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +

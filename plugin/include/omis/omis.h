@@ -241,4 +241,87 @@ OMIS_API bool omisDirectLighting(OMISScene scene, const double* points, const do
                                  OMISDirectLightingStats* stats,
                                  OMISProgressFunction progress, void* user);
 
+/* ---- Baking (lightmaps and vertex colours) ----------------------------- */
+
+/* A bake job on one mesh of a committed scene: set parameters, commit, then
+ * execute (any number of times; each execution returns a new result). */
+typedef struct OMISBakeImpl* OMISBake;
+/* The outcome of one execution: images (or per-vertex arrays) and statistics. */
+typedef struct OMISBakeResultImpl* OMISBakeResult;
+
+typedef enum OMISBakeTarget {
+    OMIS_BAKE_LIGHTMAP = 0, /* the mesh's UV layout, width × height texels */
+    OMIS_BAKE_VERTICES = 1, /* one value per mesh vertex (Blender POINT) */
+    OMIS_BAKE_CORNERS = 2   /* one value per triangle corner (Blender CORNER) */
+} OMISBakeTarget;
+
+/* The job keeps a reference to the scene. */
+OMIS_API OMISBake omisNewBake(OMISScene scene, OMISBakeTarget target, unsigned int mesh);
+OMIS_API void omisRetainBake(OMISBake bake);
+OMIS_API void omisReleaseBake(OMISBake bake);
+
+/* Parameters, before commit (defaults in brackets):
+ *   integers: "width", "height" (lightmap size, required for lightmaps),
+ *             "margin" [16] texels of extension around UV islands,
+ *             "samples" [64] sample budget: directions per texel in all,
+ *             "seed" [0], "smoothNormals" [1], "roundsPerPass" [4] (passes are
+ *             used when a time or noise budget is set)
+ *   floats:   "timeBudget" [0 = none] seconds, "noiseTarget" [0 = none]
+ *             relative standard error per texel, "beta" [2], "cutoff" [0.1]
+ *   strings:  "techniques" [""] comma-separated names (SPEC §3), "" = the
+ *             effect plan's default; "strategy" ["optimal-direct"]
+ *   counts:   samples of each named technique per round [1 each]
+ * A bake stops at the first budget reached: samples, time or noise. */
+OMIS_API void omisSetBakeInt(OMISBake bake, const char* name, int64_t value);
+OMIS_API void omisSetBakeFloat(OMISBake bake, const char* name, double value);
+OMIS_API void omisSetBakeString(OMISBake bake, const char* name, const char* value);
+OMIS_API void omisSetBakeCounts(OMISBake bake, const int* counts, int numCounts);
+/* Called now and then with the fraction done (any thread, see
+ * OMISProgressFunction); returning false cancels the execution. */
+OMIS_API void omisSetBakeProgressFunction(OMISBake bake, OMISProgressFunction progress,
+                                          void* user);
+/* Validates the parameters against the scene; errors name the parameter. */
+OMIS_API void omisCommitBake(OMISBake bake);
+/* Runs the bake; returns a new result (count 1), or NULL on error or when
+ * cancelled (OMIS_ERROR_CANCELLED). Nothing is written anywhere. */
+OMIS_API OMISBakeResult omisExecuteBake(OMISBake bake);
+
+OMIS_API void omisRetainBakeResult(OMISBakeResult result);
+OMIS_API void omisReleaseBakeResult(OMISBakeResult result);
+
+/* Lightmaps: width × height; vertex bakes: count × 1. */
+OMIS_API bool omisGetBakeResultSize(OMISBakeResult result, int* width, int* height);
+/* The result's own arrays, valid while the result lives, row 0 at the bottom:
+ *   "value": width·height·3 floats, E_direct/π (RGB)
+ *   "noise": width·height floats, estimated relative standard error
+ *   "mask":  width·height floats, 1 where baked, 0 in the margin or empty */
+OMIS_API const float* omisGetBakeResultData(OMISBakeResult result, const char* name);
+
+typedef struct OMISBakeStats {
+    int status;              /* 0 complete, 1 time budget reached, 2 noise target reached */
+    double seconds;
+    uint64_t samples;        /* directions drawn */
+    uint64_t raysTraced;
+    double samplesPerTexel;  /* mean over baked texels */
+    double meanRelativeError;
+    double maxRelativeError;
+    int passes;
+    uint64_t texels;         /* width · height */
+    uint64_t covered;        /* texels inside the UV layout */
+    uint64_t degenerateUvTriangles;
+} OMISBakeStats;
+OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats);
+/* The effect plan and technique choice of the bake as text; returns the full
+ * length without the NUL and writes at most bufferSize bytes (as
+ * omisGetEffectPlan). */
+OMIS_API size_t omisGetBakeResultPlan(OMISBakeResult result, char* buffer, size_t bufferSize);
+
+/* Files, written atomically (temporary file, then rename): a failed write
+ * leaves an existing file as it was. EXR: linear float channels R, G, B,
+ * noise, mask. PNG: 8-bit through the OCIO view transform of Blender's config
+ * (view "Standard" or "Filmic", display "sRGB"; NULL = those defaults). */
+OMIS_API bool omisWriteBakeResultEXR(OMISBakeResult result, const char* path);
+OMIS_API bool omisWriteBakeResultPNG(OMISBakeResult result, const char* path,
+                                     const char* view, const char* display, double exposure);
+
 #endif /* OMIS_H */

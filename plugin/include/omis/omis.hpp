@@ -53,5 +53,7 @@ private:
 
 using EstimatorRef = Ref<OMISEstimator, omisRetainEstimator, omisReleaseEstimator>;
 using SceneRef = Ref<OMISScene, omisRetainScene, omisReleaseScene>;
+using BakeRef = Ref<OMISBake, omisRetainBake, omisReleaseBake>;
+using BakeResultRef = Ref<OMISBakeResult, omisRetainBakeResult, omisReleaseBakeResult>;
 
 }  // namespace omis::capi

@@ -1,0 +1,306 @@
+// C ABI of bake jobs and their results (omis.h, "Baking").
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "api_common.h"
+#include "bake/bake.h"
+#include "io/image_io.h"
+#include "scene_impl.h"
+
+using namespace omis::api;
+
+struct OMISBakeImpl : RefCounted {
+    OMISSceneImpl* scene = nullptr;  // retained
+    omis::BakeSettings settings;
+    std::string techniques, strategy = "optimal-direct";
+    std::vector<int> counts;
+    std::int64_t samples = 64;
+    OMISProgressFunction progress = nullptr;
+    void* progress_user = nullptr;
+    bool committed = false;
+
+    ~OMISBakeImpl() override {
+        if (scene) release(scene);
+    }
+    void require_uncommitted(const char* what) const {
+        if (committed)
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           std::string(what) + ": parameters cannot change after omisCommitBake");
+    }
+};
+
+struct OMISBakeResultImpl : RefCounted {
+    omis::BakeResult result;
+};
+
+namespace {
+
+int to_int(std::int64_t value, const char* name, std::int64_t lo, std::int64_t hi) {
+    if (value < lo || value > hi)
+        throw std::invalid_argument(std::string(name) + ": " + std::to_string(value) +
+                                    " is out of range [" + std::to_string(lo) + ", " +
+                                    std::to_string(hi) + "]");
+    return int(value);
+}
+
+}  // namespace
+
+OMIS_API OMISBake omisNewBake(OMISScene scene, OMISBakeTarget target, unsigned int mesh) {
+    return guarded<OMISBake>(nullptr, [&] {
+        auto* s = checked(scene, "scene");
+        if (target != OMIS_BAKE_LIGHTMAP && target != OMIS_BAKE_VERTICES &&
+            target != OMIS_BAKE_CORNERS)
+            throw std::invalid_argument("target: unknown bake target " +
+                                        std::to_string(int(target)));
+        auto bake = std::make_unique<OMISBakeImpl>();
+        bake->settings.target = target == OMIS_BAKE_LIGHTMAP   ? omis::BakeTarget::Lightmap
+                                : target == OMIS_BAKE_VERTICES ? omis::BakeTarget::Vertices
+                                                               : omis::BakeTarget::Corners;
+        bake->settings.mesh = mesh;
+        retain(s);
+        bake->scene = s;
+        return bake.release();
+    });
+}
+
+OMIS_API void omisRetainBake(OMISBake bake) {
+    guarded_void([&] { retain(checked(bake, "bake")); });
+}
+OMIS_API void omisReleaseBake(OMISBake bake) {
+    guarded_void([&] { release(checked(bake, "bake")); });
+}
+
+OMIS_API void omisSetBakeInt(OMISBake bake, const char* name, int64_t value) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        const std::string key = checked(name, "name");
+        b->require_uncommitted(key.c_str());
+        auto& s = b->settings;
+        if (key == "width") s.width = to_int(value, "width", 1, 1 << 16);
+        else if (key == "height") s.height = to_int(value, "height", 1, 1 << 16);
+        else if (key == "margin") s.margin = to_int(value, "margin", 0, 1 << 16);
+        else if (key == "samples") b->samples = to_int(value, "samples", 1, 1 << 30);
+        else if (key == "seed") s.lighting.seed = std::uint64_t(value);
+        else if (key == "smoothNormals") s.smooth_normals = value != 0;
+        else if (key == "roundsPerPass") s.rounds_per_pass = to_int(value, "roundsPerPass", 1, 1 << 20);
+        else throw std::invalid_argument("name: unknown integer bake parameter '" + key + "'");
+    });
+}
+
+OMIS_API void omisSetBakeFloat(OMISBake bake, const char* name, double value) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        const std::string key = checked(name, "name");
+        b->require_uncommitted(key.c_str());
+        if (!std::isfinite(value)) throw std::invalid_argument(key + ": must be finite");
+        auto& s = b->settings;
+        if (key == "timeBudget") s.time_budget = value;
+        else if (key == "noiseTarget") s.noise_target = value;
+        else if (key == "beta") s.lighting.options.beta = value;
+        else if (key == "cutoff") s.lighting.options.cutoff = value;
+        else throw std::invalid_argument("name: unknown float bake parameter '" + key + "'");
+    });
+}
+
+OMIS_API void omisSetBakeString(OMISBake bake, const char* name, const char* value) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        const std::string key = checked(name, "name");
+        b->require_uncommitted(key.c_str());
+        const std::string v = value ? value : "";
+        if (key == "techniques") b->techniques = v;
+        else if (key == "strategy") b->strategy = v;
+        else throw std::invalid_argument("name: unknown string bake parameter '" + key + "'");
+    });
+}
+
+OMIS_API void omisSetBakeCounts(OMISBake bake, const int* counts, int numCounts) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        b->require_uncommitted("counts");
+        if (numCounts < 0) throw std::invalid_argument("numCounts: must not be negative");
+        if (numCounts > 0) checked(counts, "counts");
+        b->counts.assign(counts, counts + numCounts);
+    });
+}
+
+OMIS_API void omisSetBakeProgressFunction(OMISBake bake, OMISProgressFunction progress,
+                                          void* user) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        b->progress = progress;
+        b->progress_user = user;
+    });
+}
+
+OMIS_API void omisCommitBake(OMISBake bake) {
+    guarded_void([&] {
+        auto* b = checked(bake, "bake");
+        if (b->committed) return;
+        const omis::Scene& scene = b->scene->committed_scene("bake");
+        auto& s = b->settings;
+        const auto strategy = omis::parse_strategy(b->strategy);
+        if (!strategy)
+            throw std::invalid_argument("strategy: unknown strategy '" + b->strategy + "'");
+        s.lighting.strategy = *strategy;
+        if (b->techniques.empty()) {
+            omis::default_techniques(scene, s.lighting.techniques, s.lighting.samples);
+            if (!b->counts.empty())
+                throw std::invalid_argument("counts: given without techniques");
+        } else {
+            // Parse once with placeholder counts to learn how many names there are.
+            const std::vector<int> ones(1 + std::count(b->techniques.begin(),
+                                                       b->techniques.end(), ','), 1);
+            const TechniqueChoice probe =
+                choose_techniques(scene, b->techniques.c_str(), ones.data());
+            std::vector<int> counts = b->counts;
+            if (counts.empty()) counts.assign(probe.techniques.size(), 1);
+            if (counts.size() != probe.techniques.size())
+                throw std::invalid_argument("counts: expected " +
+                                            std::to_string(probe.techniques.size()) +
+                                            " entries (one per technique), got " +
+                                            std::to_string(counts.size()));
+            const TechniqueChoice choice =
+                choose_techniques(scene, b->techniques.c_str(), counts.data());
+            s.lighting.techniques = choice.techniques;
+            s.lighting.samples = choice.samples;
+        }
+        long long per_round = 0;
+        for (int c : s.lighting.samples) per_round += c;
+        if (per_round <= 0 && !s.lighting.techniques.empty())
+            throw std::invalid_argument("counts: at least one technique needs samples");
+        s.lighting.rounds = int(std::max<long long>(1, per_round ? b->samples / per_round : 1));
+        if (s.target == omis::BakeTarget::Lightmap && (s.width < 1 || s.height < 1))
+            throw std::invalid_argument("width, height: a lightmap bake needs both");
+        // Validates the rest (mesh id, UVs, technique list) without shading.
+        omis::LightingContext check(scene, s.lighting);
+        if (s.mesh >= scene.geometry().num_meshes())
+            throw std::invalid_argument("mesh: id " + std::to_string(s.mesh) +
+                                        " is out of range (" +
+                                        std::to_string(scene.geometry().num_meshes()) +
+                                        " meshes)");
+        if (s.target == omis::BakeTarget::Lightmap && !scene.geometry().mesh(s.mesh).has_uvs())
+            throw std::invalid_argument("mesh: '" + scene.geometry().mesh(s.mesh).name +
+                                        "' has no UV map to bake into");
+        b->committed = true;
+    });
+}
+
+OMIS_API OMISBakeResult omisExecuteBake(OMISBake bake) {
+    return guarded<OMISBakeResult>(nullptr, [&] {
+        auto* b = checked(bake, "bake");
+        if (!b->committed)
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           "bake: not committed (call omisCommitBake first)");
+        ScopedRetain hold(b);
+        omis::BakeProgress progress;
+        if (b->progress) {
+            const OMISProgressFunction fn = b->progress;
+            void* user = b->progress_user;
+            progress = [fn, user](double fraction) { return fn(user, fraction); };
+        }
+        auto result = std::make_unique<OMISBakeResultImpl>();
+        result->result = omis::bake(b->scene->scene, b->settings, progress);
+        if (result->result.stats.status == omis::BakeStatus::Cancelled)
+            throw ApiError(OMIS_ERROR_CANCELLED, "bake: cancelled");
+        return result.release();
+    });
+}
+
+OMIS_API void omisRetainBakeResult(OMISBakeResult result) {
+    guarded_void([&] { retain(checked(result, "result")); });
+}
+OMIS_API void omisReleaseBakeResult(OMISBakeResult result) {
+    guarded_void([&] { release(checked(result, "result")); });
+}
+
+OMIS_API bool omisGetBakeResultSize(OMISBakeResult result, int* width, int* height) {
+    return guarded(false, [&] {
+        const auto& r = checked(result, "result")->result;
+        *checked(width, "width") = r.width;
+        *checked(height, "height") = r.height;
+        return true;
+    });
+}
+
+OMIS_API const float* omisGetBakeResultData(OMISBakeResult result, const char* name) {
+    return guarded<const float*>(nullptr, [&]() -> const float* {
+        const auto& r = checked(result, "result")->result;
+        const std::string key = checked(name, "name");
+        if (key == "value") return r.value.data();
+        if (key == "noise") return r.noise.data();
+        if (key == "mask") return r.mask.data();
+        throw std::invalid_argument("name: unknown result array '" + key +
+                                    "' (value, noise, mask)");
+    });
+}
+
+OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats) {
+    return guarded(false, [&] {
+        const auto& s = checked(result, "result")->result.stats;
+        OMISBakeStats& out = *checked(stats, "stats");
+        out.status = s.status == omis::BakeStatus::TimeBudget    ? 1
+                     : s.status == omis::BakeStatus::NoiseTarget ? 2
+                                                                 : 0;
+        out.seconds = s.seconds;
+        out.samples = s.samples;
+        out.raysTraced = s.rays_traced;
+        out.samplesPerTexel = s.samples_per_texel;
+        out.meanRelativeError = s.mean_relative_error;
+        out.maxRelativeError = s.max_relative_error;
+        out.passes = s.passes;
+        out.texels = s.texels;
+        out.covered = s.covered;
+        out.degenerateUvTriangles = s.degenerate_uv_triangles;
+        return true;
+    });
+}
+
+OMIS_API size_t omisGetBakeResultPlan(OMISBakeResult result, char* buffer, size_t size) {
+    return guarded<size_t>(0, [&] {
+        const auto& s = checked(result, "result")->result.stats;
+        std::string text = s.plan;
+        if (buffer && size > 0) {
+            const std::size_t n = std::min(text.size(), size - 1);
+            std::memcpy(buffer, text.data(), n);
+            buffer[n] = '\0';
+        }
+        return text.size();
+    });
+}
+
+OMIS_API bool omisWriteBakeResultEXR(OMISBakeResult result, const char* path) {
+    return guarded(false, [&] {
+        const auto& r = checked(result, "result")->result;
+        omis::ImageChannels image;
+        image.width = r.width;
+        image.height = r.height;
+        image.names = {"R", "G", "B", "noise", "mask"};
+        const std::size_t n = std::size_t(r.width) * r.height;
+        image.pixels.resize(n * 5);
+        for (std::size_t i = 0; i < n; ++i) {
+            for (int c = 0; c < 3; ++c) image.pixels[5 * i + c] = r.value[3 * i + c];
+            image.pixels[5 * i + 3] = r.noise[i];
+            image.pixels[5 * i + 4] = r.mask[i];
+        }
+        omis::write_exr(checked(path, "path"), image);
+        return true;
+    });
+}
+
+OMIS_API bool omisWriteBakeResultPNG(OMISBakeResult result, const char* path, const char* view,
+                                     const char* display, double exposure) {
+    return guarded(false, [&] {
+        const auto& r = checked(result, "result")->result;
+        omis::DisplaySettings settings;
+        if (view) settings.view = view;
+        if (display) settings.display = display;
+        settings.exposure = exposure;
+        omis::write_png(checked(path, "path"), r.width, r.height, r.value.data(), settings);
+        return true;
+    });
+}

@@ -1,0 +1,60 @@
+// The scene handle, shared by the scene and bake parts of the C ABI.
+#pragma once
+
+#include <atomic>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "api_common.h"
+#include "render/scene.h"
+#include "render/techniques.h"
+
+struct OMISSceneImpl : omis::api::RefCounted {
+    omis::Scene scene;
+    std::mutex build_mutex;              // serialises adds and commit
+    std::atomic<bool> committed{false};  // set once commit has finished
+
+    // Adds run under the lock, and only before commit.
+    std::unique_lock<std::mutex> lock_for_build(const char* what) {
+        std::unique_lock<std::mutex> lock(build_mutex);
+        if (committed.load())
+            throw omis::api::ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           std::string(what) +
+                               ": the scene is already committed (add meshes "
+                               "and lights before omisCommitScene)");
+        return lock;
+    }
+    const omis::Scene& committed_scene(const char* what) const {
+        if (!committed.load())
+            throw omis::api::ApiError(
+                OMIS_ERROR_INVALID_OPERATION,
+                std::string(what) + ": scene not committed (call omisCommitScene first)");
+        return scene;
+    }
+};
+
+namespace omis::api {
+
+// Holds a reference for the duration of a call, so a concurrent release by
+// another thread cannot free the scene under it.
+struct ScopedRetain {
+    RefCounted* object;
+    explicit ScopedRetain(RefCounted* o) : object(o) { retain(o); }
+    ~ScopedRetain() { release(object); }
+    ScopedRetain(const ScopedRetain&) = delete;
+    ScopedRetain& operator=(const ScopedRetain&) = delete;
+};
+
+struct TechniqueChoice {
+    std::vector<omis::Technique> techniques;
+    std::vector<int> samples;
+};
+
+// Parses the comma-separated technique list (or takes the scene's default).
+// Parses a comma-separated technique list with one sample count per name, or
+// takes the scene's default (effect plan) when names is NULL or "".
+TechniqueChoice choose_techniques(const omis::Scene& scene, const char* names,
+                                  const int* samples);
+
+}  // namespace omis::api
