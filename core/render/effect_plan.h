@@ -33,7 +33,9 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
                         const std::vector<int>& samples);
 
 // The effect plan's default choice of techniques and samples per round for a
-// scene (what a bake uses when the caller names none).
+// scene (what a bake uses when the caller names none): solid angle + area for
+// one light; unoccluded + power selection, both solid angle, for several; plus
+// bsdf when there is a world or an emissive mesh.
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
                         std::vector<int>& samples);
 
