@@ -755,6 +755,7 @@ struct BakeOptions {
     py::object seed;
     bool smooth_normals;
     py::object progress;
+    int threads;
 };
 
 BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
@@ -780,6 +781,8 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
     omisSetBakeInt(b, "samples", o.samples);
     omisSetBakeInt(b, "seed", std::int64_t(seed_value(o.seed)));
     omisSetBakeInt(b, "smoothNormals", o.smooth_normals);
+    if (o.threads < 0) bad("threads", "must be ≥ 0 (0 = all cores)");
+    omisSetBakeInt(b, "threads", o.threads);
     omisSetBakeString(b, "strategy", o.strategy.c_str());
     omisSetBakeFloat(b, "beta", o.beta);
     omisSetBakeFloat(b, "cutoff", o.cutoff);
@@ -842,10 +845,11 @@ BakeResult bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
                    const py::object& techniques, const py::object& counts, long long samples,
                    const std::string& strategy, double beta, double cutoff,
                    const py::object& time_budget, const py::object& noise_target, int margin,
-                   const py::object& seed, bool smooth_normals, const py::object& progress) {
+                   const py::object& seed, bool smooth_normals, const py::object& progress,
+                   int threads) {
     return run_bake(scene, mesh, OMIS_BAKE_LIGHTMAP, width, height, margin,
                     {techniques, counts, samples, strategy, beta, cutoff, time_budget,
-                     noise_target, seed, smooth_normals, progress});
+                     noise_target, seed, smooth_normals, progress, threads});
 }
 
 BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::string& domain,
@@ -853,14 +857,14 @@ BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::strin
                          long long samples, const std::string& strategy, double beta,
                          double cutoff, const py::object& time_budget,
                          const py::object& noise_target, const py::object& seed,
-                         bool smooth_normals, const py::object& progress) {
+                         bool smooth_normals, const py::object& progress, int threads) {
     OMISBakeTarget target;
     if (domain == "POINT") target = OMIS_BAKE_VERTICES;
     else if (domain == "CORNER") target = OMIS_BAKE_CORNERS;
     else bad("domain", "expected 'POINT' or 'CORNER', got '" + domain + "'");
     return run_bake(scene, mesh, target, 0, 0, 0,
                     {techniques, counts, samples, strategy, beta, cutoff, time_budget,
-                     noise_target, seed, smooth_normals, progress});
+                     noise_target, seed, smooth_normals, progress, threads});
 }
 
 }  // namespace
@@ -989,20 +993,22 @@ return_stats=True.)doc");
           py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
           py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
           py::arg("margin") = 16, py::arg("seed") = 0, py::arg("smooth_normals") = true,
-          py::arg("progress") = py::none(),
+          py::arg("progress") = py::none(), py::arg("threads") = 0,
           R"doc(Bakes E_direct/π into a mesh's UV lightmap of width × height texels.
 
 techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
 of each technique per round (1 each by default); samples: the sample budget per
 texel. time_budget (s) and noise_target (relative standard error) stop the bake
 earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
-raises omis.Cancelled / KeyboardInterrupt and nothing is returned.)doc");
+raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: worker
+threads (0 = all cores); results do not depend on it.)doc");
     m.def("bake_vertices", &bake_vertices, py::arg("scene"), py::arg("mesh"), py::kw_only(),
           py::arg("domain") = "POINT", py::arg("techniques") = py::none(),
           py::arg("counts") = py::none(), py::arg("samples") = 64,
           py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
           py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
           py::arg("seed") = 0, py::arg("smooth_normals") = true, py::arg("progress") = py::none(),
+          py::arg("threads") = 0,
           R"doc(Bakes E_direct/π at a mesh's vertices (domain "POINT") or triangle corners
 ("CORNER", 3 per triangle in triangle order), as bake_uv does for texels.)doc");
 }

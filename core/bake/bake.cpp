@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <atomic>
@@ -76,19 +77,27 @@ std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth
 }
 
 // Running statistics of one point over passes: the mean of the pass
-// estimates and the sum of their variances.
+// estimates, the sum of their reported variances, and the spread of the pass
+// estimates' luminance (Welford), which does not share the in-sample optimism
+// a per-pass variance estimate can have at low sample counts.
 struct PointState {
     float mean[3] = {0, 0, 0};
     float variance_sum[3] = {0, 0, 0};
+    float spread_mean = 0, spread_m2 = 0;
     std::uint16_t passes = 0;
     bool done = false;
 };
 
+// A point may stop for the noise target only after this many passes: the
+// spread of fewer pass estimates says too little about their variance.
+constexpr int kMinPassesForNoiseTarget = 3;
+
 double relative_error(const PointState& s) {
     if (s.passes == 0) return 0;
     const double value = luminance(Vec3(s.mean[0], s.mean[1], s.mean[2]));
-    const double var = luminance(Vec3(s.variance_sum[0], s.variance_sum[1], s.variance_sum[2])) /
-                       (double(s.passes) * s.passes);
+    double var = luminance(Vec3(s.variance_sum[0], s.variance_sum[1], s.variance_sum[2])) /
+                 (double(s.passes) * s.passes);
+    if (s.passes >= 2) var = std::max(var, double(s.spread_m2) / (s.passes - 1) / s.passes);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
     return std::sqrt(std::max(0.0, var)) / value;
 }
@@ -106,6 +115,14 @@ const char* bake_status_name(BakeStatus status) {
 }
 
 BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& progress) {
+    if (in.threads < 0) throw std::invalid_argument("threads: must be ≥ 0 (0 = all cores)");
+    if (in.threads > 0) {
+        // The same bits at any thread count: only the arena's width changes.
+        tbb::task_arena arena(in.threads);
+        BakeSettings all = in;
+        all.threads = 0;
+        return arena.execute([&] { return bake(scene, all, progress); });
+    }
     const auto start = Clock::now();
     if (!scene.committed())
         throw std::logic_error("scene: not committed (call commit before baking)");
@@ -219,7 +236,12 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                         s.mean[c] += float((value[c] - s.mean[c]) / s.passes);
                         s.variance_sum[c] += float(variance[c]);
                     }
-                    if (settings.noise_target > 0 && relative_error(s) <= settings.noise_target)
+                    const double lum = luminance(Vec3(value[0], value[1], value[2]));
+                    const double delta = lum - s.spread_mean;
+                    s.spread_mean += float(delta / s.passes);
+                    s.spread_m2 += float(delta * (lum - s.spread_mean));
+                    if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
+                        relative_error(s) <= settings.noise_target)
                         s.done = true;
                     if (progress && (shaded.fetch_add(1, std::memory_order_relaxed) & 31) == 0)
                         report_progress();

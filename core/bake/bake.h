@@ -31,6 +31,7 @@ struct BakeSettings {
     // passes. Each pass is one independent estimate per texel (its own
     // solve); passes are averaged.
     int rounds_per_pass = 4;
+    int threads = 0;            // worker threads; 0 = all cores
 };
 
 struct BakeStats {

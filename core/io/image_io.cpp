@@ -1,6 +1,7 @@
 #include "io/image_io.h"
 
 #include <OpenColorIO/OpenColorIO.h>
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
 #include <glob.h>
@@ -91,49 +92,48 @@ public:
 
         // Keep the name within NAME_MAX whatever the destination's length.
         if (base.size() > 200) base.resize(200);
-        std::string name = (dir_ == "/" ? "" : dir_) + "/." + base + ".omis-XXXXXX.tmp";
-        if (slash == std::string::npos) name = "." + base + ".omis-XXXXXX.tmp";
+        const std::string prefix = slash == std::string::npos ? "" : path.substr(0, slash + 1);
+        std::string name = prefix + "." + base + ".omis-XXXXXX.tmp";
         std::vector<char> templ(name.begin(), name.end());
         templ.push_back('\0');
-        const int fd = ::mkstemps(templ.data(), 4);
-        if (fd < 0) {
+        fd_ = ::mkostemps(templ.data(), 4, O_CLOEXEC);
+        if (fd_ < 0) {
             fail(writer, path, "cannot create a temporary file in " + quoted(dir_) + ": " +
                                    std::strerror(errno));
         }
         tmp_ = templ.data();
-        const bool chmod_ok = ::fchmod(fd, mode) == 0;
-        const int chmod_errno = errno;
-        ::close(fd);
-        if (!chmod_ok) {
-            ::unlink(tmp_.c_str());
-            fail(writer, path, "cannot set permissions of a temporary file: " +
-                                   std::string(std::strerror(chmod_errno)));
+        if (::fchmod(fd_, mode) != 0) {
+            fail(writer, path, "cannot set permissions of the temporary file: " +
+                                   std::string(std::strerror(errno)));
         }
     }
 
     ~TempFile() {
+        if (fd_ >= 0) ::close(fd_);
         if (!committed_) ::unlink(tmp_.c_str());
     }
     TempFile(const TempFile&) = delete;
     TempFile& operator=(const TempFile&) = delete;
 
     const std::string& path() const { return tmp_; }
+    int fd() const { return fd_; }
 
     // Flush the complete file to disk, then rename it over the destination, so
     // that after a crash the destination is either the old or the new file.
     void commit() {
-        const int fd = ::open(tmp_.c_str(), O_RDONLY | O_CLOEXEC);
-        if (fd < 0 || ::fsync(fd) != 0) {
-            const int e = errno;
-            if (fd >= 0) ::close(fd);
-            fail(writer_, path_, "cannot flush the temporary file: " +
-                                     std::string(std::strerror(e)));
+        if (::fsync(fd_) != 0) {
+            fail(writer_, path_, "cannot flush the temporary file " + quoted(tmp_) + ": " +
+                                     std::strerror(errno));
         }
-        ::close(fd);
+        const int fd = fd_;
+        fd_ = -1;
+        if (::close(fd) != 0) {
+            fail(writer_, path_, "cannot close the temporary file " + quoted(tmp_) + ": " +
+                                     std::strerror(errno));
+        }
         if (::rename(tmp_.c_str(), path_.c_str()) != 0) {
-            fail(writer_, path_,
-                 "cannot rename the temporary file over it: " +
-                     std::string(std::strerror(errno)));
+            fail(writer_, path_, "cannot rename the temporary file " + quoted(tmp_) +
+                                     " over it: " + std::strerror(errno));
         }
         committed_ = true;
         // Make the rename itself durable; the file is in place either way.
@@ -149,7 +149,50 @@ private:
     std::string path_;
     std::string dir_;
     std::string tmp_;
+    int fd_ = -1;
     bool committed_ = false;
+};
+
+// OpenImageIO's output through a file descriptor, checking every write: some
+// of its writers (PNG in 2.4) ignore failed writes and report success, which
+// would rename a truncated file into place.
+class CheckedFdOutput : public OIIO::Filesystem::IOProxy {
+public:
+    CheckedFdOutput(const std::string& name, int fd) : IOProxy(name, Write), fd_(fd) {}
+    const char* proxytype() const override { return "omis-fd"; }
+    bool seek(int64_t offset) override {
+        if (offset < 0) return false;
+        m_pos = offset;
+        return true;
+    }
+    size_t write(const void* buf, size_t size) override {
+        const size_t done = pwrite(buf, size, m_pos);
+        m_pos += int64_t(done);
+        return done;
+    }
+    size_t pwrite(const void* buf, size_t size, int64_t offset) override {
+        const char* p = static_cast<const char*>(buf);
+        size_t done = 0;
+        while (done < size) {
+            const ssize_t n = ::pwrite(fd_, p + done, size - done, offset + int64_t(done));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) {
+                if (first_errno_ == 0) first_errno_ = n < 0 ? errno : EIO;
+                break;
+            }
+            done += size_t(n);
+        }
+        size_ = std::max(size_, size_t(offset) + done);
+        return done;
+    }
+    size_t size() const override { return size_; }
+    // The first failed write's errno, 0 if none failed.
+    int first_errno() const { return first_errno_; }
+
+private:
+    int fd_;
+    size_t size_ = 0;
+    int first_errno_ = 0;
 };
 
 // Writes `pixels` (bottom row first, rows of `row_bytes`) as a top-row-first
@@ -158,19 +201,33 @@ void write_atomically(const char* writer, const std::string& path, const char* f
                       const OIIO::ImageSpec& spec, OIIO::TypeDesc type,
                       const unsigned char* pixels, std::ptrdiff_t row_bytes) {
     TempFile tmp(writer, path);
+    CheckedFdOutput proxy(tmp.path(), tmp.fd());
     std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(format);
     if (!out) fail(writer, path, "OpenImageIO: " + OIIO::geterror());
-    if (!out->open(tmp.path(), spec)) fail(writer, path, "OpenImageIO: " + out->geterror());
+    if (!out->set_ioproxy(&proxy)) fail(writer, path, "OpenImageIO: " + out->geterror());
+    // The first failed write explains whatever the writer made of it.
+    auto oiio_failure = [&](const std::string& error) {
+        std::string why = "OpenImageIO: " + error;
+        if (proxy.first_errno() != 0) {
+            why = std::string(std::strerror(proxy.first_errno())) + " (" + why + ")";
+        }
+        fail(writer, path, why);
+    };
+    if (!out->open(tmp.path(), spec)) oiio_failure(out->geterror());
     // Start at the last buffer row with a negative row stride: the file's first
     // scanline is the image's top row.
     const unsigned char* top = pixels + (spec.height - 1) * row_bytes;
     if (!out->write_image(type, top, OIIO::AutoStride, -row_bytes)) {
         const std::string error = out->geterror();
         out->close();
-        fail(writer, path, "OpenImageIO: " + error);
+        oiio_failure(error);
     }
-    if (!out->close()) fail(writer, path, "OpenImageIO: " + out->geterror());
+    if (!out->close()) oiio_failure(out->geterror());
     out.reset();
+    if (proxy.first_errno() != 0) {
+        fail(writer, path, std::string(std::strerror(proxy.first_errno())) +
+                               " while writing the temporary file " + quoted(tmp.path()));
+    }
     tmp.commit();
 }
 

@@ -377,15 +377,16 @@ MisResult MisEstimator::result() const {
                                                      counts_.data(), R * samples_per_round_);
             out.rank = solved.rank;
             out.estimate = control_variate_estimate(solved.alpha);
-            // Kept α: the unbiased residual variance of the fit (solver.h, rule 3);
-            // otherwise the estimate is the balance heuristic's, and so is its variance.
+            // Kept α: the unbiased residual variance of the fit times the cost of
+            // estimating α (solver.h, rule 3); otherwise the estimate is the
+            // balance heuristic's, and so is its variance.
             const double S = R * samples_per_round_, k = solved.free_coefficients;
             for (int c = 0; c < C_; ++c)
                 out.variance[c] =
                     solved.kept[c] ? pooled_round_variance(N_, C_, c, mo.a.data(), mo.b.data(),
                                                            mo.m.data(), counts_.data(),
                                                            solved.alpha.data()) *
-                                         S / (S - k - 1) / R
+                                         S / (S - k - 1) * (S - 2) / (S - k - 2) / R
                                    : heuristic_variance(c);
             break;
         }

@@ -86,6 +86,7 @@ OMIS_API void omisSetBakeInt(OMISBake bake, const char* name, int64_t value) {
         else if (key == "samples") b->samples = to_int(value, "samples", 1, 1 << 30);
         else if (key == "seed") s.lighting.seed = std::uint64_t(value);
         else if (key == "smoothNormals") s.smooth_normals = value != 0;
+        else if (key == "threads") s.threads = to_int(value, "threads", 0, 1 << 16);
         else if (key == "roundsPerPass") s.rounds_per_pass = to_int(value, "roundsPerPass", 1, 1 << 20);
         else throw std::invalid_argument("name: unknown integer bake parameter '" + key + "'");
     });

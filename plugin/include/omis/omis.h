@@ -265,7 +265,8 @@ OMIS_API void omisReleaseBake(OMISBake bake);
  *             "margin" [16] texels of extension around UV islands,
  *             "samples" [64] sample budget: directions per texel in all,
  *             "seed" [0], "smoothNormals" [1], "roundsPerPass" [4] (passes are
- *             used when a time or noise budget is set)
+ *             used when a time or noise budget is set), "threads" [0 = all
+ *             cores; results do not depend on it]
  *   floats:   "timeBudget" [0 = none] seconds, "noiseTarget" [0 = none]
  *             relative standard error per texel, "beta" [2], "cutoff" [0.1]
  *   strings:  "techniques" [""] comma-separated names (SPEC §3), "" = the
