@@ -28,18 +28,14 @@ struct BakePoint {
 // lights' per-point work, and a tile is the unit of progress and cancel.
 constexpr int kTile = 16;
 
-std::vector<BakePoint> lightmap_points(const Mesh& mesh, const UvCoverage& cov,
-                                       bool smooth) {
-    std::vector<BakePoint> points(cov.triangle.size());
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        if (!cov.is_covered(i)) continue;
-        const std::uint32_t t = cov.triangle[i];
-        const Vec3 ng = mesh.geometric_normal(t);
-        Vec3 n = smooth ? mesh.shading_normal(t, cov.b1[i], cov.b2[i]) : ng;
-        if (!(length(n) > 0)) n = ng;
-        points[i] = {mesh.position(t, cov.b1[i], cov.b2[i]), n, ng};
-    }
-    return points;
+// The shading point at a covered texel, from its triangle and barycentrics
+// (computed when shaded rather than stored: 72 bytes a texel otherwise).
+BakePoint lightmap_point(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth) {
+    const std::uint32_t t = cov.triangle[i];
+    const Vec3 ng = mesh.geometric_normal(t);
+    Vec3 n = smooth ? mesh.shading_normal(t, cov.b1[i], cov.b2[i]) : ng;
+    if (!(length(n) > 0)) n = ng;
+    return {mesh.position(t, cov.b1[i], cov.b2[i]), n, ng};
 }
 
 // Vertices take the area-weighted mean of their faces' normals (shading and
@@ -76,13 +72,13 @@ std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth
     return points;
 }
 
-// Running statistics of one point over passes: the mean of the pass
-// estimates, the sum of their reported variances, and the spread of the pass
-// estimates' luminance (Welford), which does not share the in-sample optimism
-// a per-pass variance estimate can have at low sample counts.
+// Running statistics of one point over passes, beside its running mean (kept
+// in the output image itself): the sum of the passes' reported variances and
+// the spread of the pass estimates (Welford), both of luminance. The spread
+// does not share the in-sample optimism a per-pass variance estimate can have
+// at low sample counts. 16 bytes a point.
 struct PointState {
-    float mean[3] = {0, 0, 0};
-    float variance_sum[3] = {0, 0, 0};
+    float variance_sum = 0;
     float spread_mean = 0, spread_m2 = 0;
     std::uint16_t passes = 0;
     bool done = false;
@@ -92,11 +88,10 @@ struct PointState {
 // spread of fewer pass estimates says too little about their variance.
 constexpr int kMinPassesForNoiseTarget = 3;
 
-double relative_error(const PointState& s) {
+double relative_error(const PointState& s, const float* mean) {
     if (s.passes == 0) return 0;
-    const double value = luminance(Vec3(s.mean[0], s.mean[1], s.mean[2]));
-    double var = luminance(Vec3(s.variance_sum[0], s.variance_sum[1], s.variance_sum[2])) /
-                 (double(s.passes) * s.passes);
+    const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
+    double var = double(s.variance_sum) / (double(s.passes) * s.passes);
     if (s.passes >= 2) var = std::max(var, double(s.spread_m2) / (s.passes - 1) / s.passes);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
     return std::sqrt(std::max(0.0, var)) / value;
@@ -144,10 +139,9 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // Where to shade.
     BakeResult result;
     UvCoverage coverage;
-    std::vector<BakePoint> points;
+    std::vector<BakePoint> points;  // vertex bakes only
     if (settings.target == BakeTarget::Lightmap) {
         coverage = rasterize_uv(mesh, settings.width, settings.height);
-        points = lightmap_points(mesh, coverage, settings.smooth_normals);
         result.width = settings.width;
         result.height = settings.height;
     } else {
@@ -156,7 +150,9 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         result.width = int(points.size());
         result.height = 1;
     }
-    const std::size_t count = points.size();
+    const std::size_t count = settings.target == BakeTarget::Lightmap
+                                  ? coverage.triangle.size()
+                                  : points.size();
     auto covered = [&](std::size_t i) {
         return settings.target != BakeTarget::Lightmap || coverage.is_covered(i);
     };
@@ -173,6 +169,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     const LightingContext context(scene, pass_settings);
 
     std::vector<PointState> state(count);
+    result.value.assign(count * 3, 0.f);  // the running means
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
     std::atomic<bool> cancel{false}, out_of_time{false};
     std::mutex report;
@@ -228,20 +225,22 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                     PointState& s = state[i];
                     if (!covered(i) || s.done || cancel.load(std::memory_order_relaxed)) return;
                     double value[3], variance[3];
-                    const BakePoint& p = points[i];
+                    const BakePoint p = settings.target == BakeTarget::Lightmap
+                                            ? lightmap_point(mesh, coverage, i,
+                                                             settings.smooth_normals)
+                                            : points[i];
                     shader.shade(i, std::uint64_t(pass), p.position, p.normal,
                                  p.geometric_normal, value, variance);
                     ++s.passes;
-                    for (int c = 0; c < 3; ++c) {
-                        s.mean[c] += float((value[c] - s.mean[c]) / s.passes);
-                        s.variance_sum[c] += float(variance[c]);
-                    }
+                    float* mean = &result.value[3 * i];
+                    for (int c = 0; c < 3; ++c) mean[c] += float((value[c] - mean[c]) / s.passes);
+                    s.variance_sum += float(luminance(Vec3(variance[0], variance[1], variance[2])));
                     const double lum = luminance(Vec3(value[0], value[1], value[2]));
                     const double delta = lum - s.spread_mean;
                     s.spread_mean += float(delta / s.passes);
                     s.spread_m2 += float(delta * (lum - s.spread_mean));
                     if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-                        relative_error(s) <= settings.noise_target)
+                        relative_error(s, mean) <= settings.noise_target)
                         s.done = true;
                     if (progress && (shaded.fetch_add(1, std::memory_order_relaxed) & 31) == 0)
                         report_progress();
@@ -266,7 +265,6 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     }
 
     // Outputs, then the margin around UV islands.
-    result.value.assign(count * 3, 0.f);
     result.noise.assign(count, 0.f);
     result.mask.assign(count, 0.f);
     BakeStats& stats = result.stats;
@@ -275,8 +273,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     for (std::size_t i = 0; i < count; ++i) {
         if (!covered(i)) continue;
         const PointState& s = state[i];
-        for (int c = 0; c < 3; ++c) result.value[3 * i + c] = s.mean[c];
-        const double err = relative_error(s);
+        const double err = relative_error(s, &result.value[3 * i]);
         result.noise[i] = float(err);
         result.mask[i] = 1.f;
         sum_error += err;
