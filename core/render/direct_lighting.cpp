@@ -15,6 +15,7 @@
 
 #include "math/random.h"
 #include "mis/estimator.h"
+#include "sampling/spherical.h"
 #include "sampling/warp.h"
 #include "scene/ray_offset.h"
 
@@ -49,6 +50,23 @@ struct PointLighting::Impl {
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t mask, const std::vector<int>& active);
 
+    // Spherical rectangles/triangles depend on the point only: build each once
+    // per point instead of once per sample and pdf evaluation. (Skipped for
+    // scenes with very many lights, where the table would not pay.)
+    struct SolidAngleCache {
+        std::uint64_t point = ~0ull;
+        std::optional<SphericalRect> rect;
+        std::optional<SphericalTriangle> triangle;
+    };
+    static constexpr std::size_t kMaxCachedLights = 1024;
+    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x);
+    std::optional<LightSample> sample(std::uint32_t l, LightSampler sampler, const Vec3& x,
+                                      const Vec3& n, double u1, double u2);
+    double pdf(std::uint32_t l, LightSampler sampler, const Vec3& x, const Vec3& n,
+               const Vec3& w);
+    std::vector<SolidAngleCache> solid_angle_cache_;
+    std::uint64_t point_serial_ = 0;
+
     const LightingContext& p_;
     LightingCounters& counters;
     std::vector<LightChoice> choices_;  // per technique (light techniques only)
@@ -59,6 +77,53 @@ struct PointLighting::Impl {
     };
     std::vector<Hit> hits_;
 };
+
+const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
+                                                                             const Vec3& x) {
+    const Light& light = p_.scene.lights()[l];
+    if (light.type != LightType::Rect && light.type != LightType::Triangle) return nullptr;
+    if (p_.scene.lights().size() > kMaxCachedLights) return nullptr;
+    if (solid_angle_cache_.size() != p_.scene.lights().size())
+        solid_angle_cache_.resize(p_.scene.lights().size());
+    SolidAngleCache& c = solid_angle_cache_[l];
+    if (c.point != point_serial_) {
+        c.point = point_serial_;
+        if (light.type == LightType::Rect)
+            c.rect = SphericalRect::make(x, light.rect.corner, light.rect.edge_u, light.rect.edge_v);
+        else
+            c.triangle = SphericalTriangle::make(x, light.triangle.p0, light.triangle.p1,
+                                                 light.triangle.p2);
+    }
+    return &c;
+}
+
+std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, LightSampler sampler,
+                                                       const Vec3& x, const Vec3& n, double u1,
+                                                       double u2) {
+    const SolidAngleCache* c =
+        sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+    if (!c) return sample_light(p_.scene.lights()[l], sampler, x, n, u1, u2);
+    // The same draw as RectLight/TriangleLight::sample_solid_angle, from the cache.
+    if (c->rect) {
+        const DirSample s = c->rect->sample(u1, u2);
+        return LightSample{s.dir, s.dist, 1.0 / c->rect->solid_angle()};
+    }
+    if (c->triangle) {
+        const DirSample s = c->triangle->sample(u1, u2);
+        return LightSample{s.dir, s.dist, 1.0 / c->triangle->solid_angle()};
+    }
+    return std::nullopt;
+}
+
+double PointLighting::Impl::pdf(std::uint32_t l, LightSampler sampler, const Vec3& x,
+                                const Vec3& n, const Vec3& w) {
+    const SolidAngleCache* c =
+        sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+    if (!c) return light_pdf(p_.scene.lights()[l], sampler, x, n, w);
+    if (c->rect) return c->rect->pdf(w);
+    if (c->triangle) return c->triangle->pdf(w);
+    return 0.0;
+}
 
 void PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     const Technique& t = p_.settings.techniques[k];
@@ -155,7 +220,7 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
     const LightChoice& c = choices_[k];
     double pdf = 0;
     for (std::size_t i = 0; i < c.lights.size(); ++i)
-        pdf += c.probability[i] * light_pdf(p_.scene.lights()[c.lights[i]], t.sampler, x, n, w);
+        pdf += c.probability[i] * this->pdf(c.lights[i], t.sampler, x, n, w);
     counters.pdf_evaluations += c.lights.size();
     return pdf;
 }
@@ -180,6 +245,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
                                 double* variance) {
     Vec3 total, total_variance;
     const GeometryScene& geometry = p_.scene.geometry();
+    ++point_serial_;  // invalidates the per-point solid-angle cache
 
     // Delta lights: one deterministic shadow ray each.
     for (std::uint32_t l : p_.delta) {
@@ -241,8 +307,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
                         const std::size_t i = std::min<std::size_t>(
                             std::upper_bound(c.cdf.begin(), c.cdf.end(), u0) - c.cdf.begin(),
                             c.lights.size() - 1);
-                        const auto s = sample_light(p_.scene.lights()[c.lights[i]], t.sampler,
-                                                    x, n, u1, u2);
+                        const auto s = sample(c.lights[i], t.sampler, x, n, u1, u2);
                         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
                         if (ok) w = s->dir;
                     }
