@@ -134,39 +134,43 @@ double Light::power(double scene_radius) const {
     return 0;
 }
 
-Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
-                      const Vec3& radiance, bool two_sided, double spread) {
-    require_finite(corner, "corner");
-    require_finite(edge_u, "edge_u");
-    require_finite(edge_v, "edge_v");
+namespace {
+
+// The checks and fields rect and ellipse lights share: an origin point and
+// two perpendicular spanning vectors (edges or semi-axes).
+Light planar_light(LightType type, const char* what, const Vec3& origin, const char* origin_name,
+                   const Vec3& a, const char* a_name, const Vec3& b, const char* b_name,
+                   const Vec3& radiance, bool two_sided, double spread) {
+    require_finite(origin, origin_name);
+    require_finite(a, a_name);
+    require_finite(b, b_name);
     require_emission(radiance, "radiance");
-    if (!(length(cross(edge_u, edge_v)) > 0)) invalid("rect light", "has zero area");
-    require_perpendicular(edge_u, edge_v, "rect light");
+    if (!(length(cross(a, b)) > 0)) invalid(what, "has zero area");
+    require_perpendicular(a, b, what);
     if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
     Light l;
-    l.type = LightType::Rect;
-    l.rect = RectLight{corner, edge_u, edge_v};
+    l.type = type;
     l.emission = radiance;
     l.two_sided = two_sided;
     l.spread = spread;
     return l;
 }
 
+}  // namespace
+
+Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
+                      const Vec3& radiance, bool two_sided, double spread) {
+    Light l = planar_light(LightType::Rect, "rect light", corner, "corner", edge_u, "edge_u",
+                           edge_v, "edge_v", radiance, two_sided, spread);
+    l.rect = RectLight{corner, edge_u, edge_v};
+    return l;
+}
+
 Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axis_b,
                          const Vec3& radiance, bool two_sided, double spread) {
-    require_finite(center, "center");
-    require_finite(axis_a, "axis_u");
-    require_finite(axis_b, "axis_v");
-    require_emission(radiance, "radiance");
-    if (!(length(cross(axis_a, axis_b)) > 0)) invalid("ellipse light", "has zero area");
-    require_perpendicular(axis_a, axis_b, "ellipse light");
-    if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
-    Light l;
-    l.type = LightType::Ellipse;
+    Light l = planar_light(LightType::Ellipse, "ellipse light", center, "center", axis_a,
+                           "axis_u", axis_b, "axis_v", radiance, two_sided, spread);
     l.ellipse = EllipseLight{center, axis_a, axis_b};
-    l.emission = radiance;
-    l.two_sided = two_sided;
-    l.spread = spread;
     return l;
 }
 

@@ -6,16 +6,7 @@
 
 #include "omis/omis.h"
 
-static int failures = 0;
-static int checks = 0;
-#define CHECK(cond)                                                                 \
-    do {                                                                            \
-        ++checks;                                                                   \
-        if (!(cond)) {                                                              \
-            ++failures;                                                             \
-            fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond); \
-        }                                                                           \
-    } while (0)
+#include "check.h"
 
 static OMISScene floor_scene(int with_uvs) {
     const float vertices[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
@@ -137,6 +128,5 @@ int main(void) {
     omisReleaseBake(bake);
     omisReleaseScene(scene);
 
-    printf("%d passed, %d failed\n", checks - failures, failures);
-    return failures ? 1 : 0;
+    return check_summary();
 }

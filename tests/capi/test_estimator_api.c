@@ -5,16 +5,7 @@
 
 #include "omis/omis.h"
 
-static int failures = 0;
-static int checks = 0;
-#define CHECK(cond)                                                        \
-    do {                                                                   \
-        ++checks;                                                          \
-        if (!(cond)) {                                                     \
-            ++failures;                                                    \
-            fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond); \
-        }                                                                  \
-    } while (0)
+#include "check.h"
 
 static OMISError callback_code = OMIS_ERROR_NONE;
 static void on_error(void* user, OMISError code, const char* message) {
@@ -109,6 +100,5 @@ int main(void) {
     CHECK(omisGetVersion() == OMIS_VERSION);
     test_balance_matches_hand_computation();
     test_errors();
-    printf("%d passed, %d failed\n", checks - failures, failures);
-    return failures ? 1 : 0;
+    return check_summary();
 }

@@ -7,16 +7,7 @@
 
 #include "omis/omis.h"
 
-static int failures = 0;
-static int checks = 0;
-#define CHECK(cond)                                                                  \
-    do {                                                                             \
-        ++checks;                                                                    \
-        if (!(cond)) {                                                               \
-            ++failures;                                                              \
-            fprintf(stderr, "%s:%d: CHECK(%s) failed\n", __FILE__, __LINE__, #cond); \
-        }                                                                            \
-    } while (0)
+#include "check.h"
 
 static const double kPi = 3.14159265358979323846;
 
@@ -397,6 +388,5 @@ int main(void) {
     test_strided_mesh_and_shadow_rays();
     test_cancellation();
     test_effect_plan();
-    printf("%d passed, %d failed\n", checks - failures, failures);
-    return failures ? 1 : 0;
+    return check_summary();
 }
