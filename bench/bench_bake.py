@@ -11,7 +11,6 @@
 Figures are ratios measured in one run where possible: the machine is shared.
 """
 import argparse
-import resource
 import subprocess
 import sys
 import time
@@ -77,13 +76,19 @@ def accuracy_costs_time(scene, floor, size, targets, cap, reference_spp):
     return table
 
 
+# Peak RSS from /proc (VmHWM, KiB): getrusage's ru_maxrss would carry the
+# parent's peak across fork and exec on Linux and hide the child's own.
 MEMORY_PROBE = r"""
-import resource, sys, omis, omis.demo
+import sys, omis, omis.demo
+def peak():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1])
 size, spp = int(sys.argv[1]), int(sys.argv[2])
 scene, floor, _ = omis.demo.build_scene(omis)
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+before = peak()
 r = omis.bake_uv(scene, floor, size, size, samples=spp)
-after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+after = peak()
 print(before, after)
 """
 
