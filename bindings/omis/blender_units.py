@@ -51,6 +51,11 @@ __all__ = [
 # Argument checks: every error names the argument.
 
 
+# Blender stores angles as float32: its π (the default spread, the largest spot
+# size) is 3.1415927410125732, a little above math.pi. Accept it as π.
+_PI_FLOAT32 = 3.1415927410125732 * (1.0 + 1e-7)
+
+
 def _number(name: str, value, *, positive: bool = False) -> float:
     try:
         x = float(value)
@@ -126,8 +131,9 @@ def area_spread_normalization(spread: float) -> float:
     the subtraction cancels). Exactly 1 at s = π.
     """
     s = _number("spread", spread, positive=True)
-    if s > math.pi * (1.0 + 1e-12):
+    if s > _PI_FLOAT32:
         raise ValueError(f"spread must be in (0, π], got {s}")
+    s = min(s, math.pi)
     if s >= math.pi:
         return 1.0
     b = 0.5 * s
@@ -245,8 +251,9 @@ def spot_cone(spot_size: float, spot_blend: float) -> Tuple[float, float, float]
     [cos_half_angle, cos_half_angle + smooth_width] inside the cone edge.
     """
     size = _number("spot_size", spot_size, positive=True)
-    if size > math.pi * (1.0 + 1e-12):
+    if size > _PI_FLOAT32:
         raise ValueError(f"spot_size must be in (0, π], got {size}")
+    size = min(size, math.pi)
     blend = _number("spot_blend", spot_blend)
     if blend > 1.0:
         raise ValueError(f"spot_blend must be in [0, 1], got {blend}")

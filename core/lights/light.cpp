@@ -158,11 +158,18 @@ Light planar_light(LightType type, const char* what, const Vec3& origin, const c
 
 }  // namespace
 
+// Edges that pass the 1e-6 perpendicularity check (float32 world matrices
+// leave ~1e-9) are made exactly perpendicular: the spherical-rectangle and
+// ellipse samplers assume it, and would otherwise refuse the light.
+namespace {
+Vec3 orthogonal_part(const Vec3& b, const Vec3& a) { return b - a * (dot(a, b) / dot(a, a)); }
+}  // namespace
+
 Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,
                       const Vec3& radiance, bool two_sided, double spread) {
     Light l = planar_light(LightType::Rect, "rect light", corner, "corner", edge_u, "edge_u",
                            edge_v, "edge_v", radiance, two_sided, spread);
-    l.rect = RectLight{corner, edge_u, edge_v};
+    l.rect = RectLight{corner, edge_u, orthogonal_part(edge_v, edge_u)};
     return l;
 }
 
@@ -170,7 +177,7 @@ Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axi
                          const Vec3& radiance, bool two_sided, double spread) {
     Light l = planar_light(LightType::Ellipse, "ellipse light", center, "center", axis_a,
                            "axis_u", axis_b, "axis_v", radiance, two_sided, spread);
-    l.ellipse = EllipseLight{center, axis_a, axis_b};
+    l.ellipse = EllipseLight{center, axis_a, orthogonal_part(axis_b, axis_a)};
     return l;
 }
 
@@ -258,10 +265,10 @@ std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec
             if (!has_radius(l)) return std::nullopt;
             const auto hit = sphere_of(l).intersect(x, w);
             if (!hit) return std::nullopt;
-            // The facing disk's radiance I/(πr²) (SPEC §4).
+            // The facing disk's radiance I/(πr²) (SPEC §4); a spot's cone falloff
+            // is taken per point of the disk, along the ray (as Cycles 3.4 does).
             Vec3 radiance = l.emission / (kPi * l.radius * l.radius);
-            if (l.type == LightType::Spot)
-                radiance *= spot_attenuation(l, normalize(x - l.position));
+            if (l.type == LightType::Spot) radiance *= spot_attenuation(l, -w);
             return Emitted{radiance, hit->t};
         }
         case LightType::Sun: {
@@ -329,8 +336,13 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
         case LightType::Spot: {
             if (!has_radius(l)) return false;
             if (dot(l.position - x, n) <= -l.radius) return false;
-            return l.type == LightType::Point ||
-                   spot_attenuation(l, normalize(x - l.position)) > 0;
+            if (l.type == LightType::Point) return true;
+            // Some point of the disk must see x inside the cone: widen the cone
+            // by the disk's angular radius seen from x.
+            const Vec3 d = x - l.position;
+            const double dist = length(d);
+            const double angle = angle_between(d, l.spot_axis);
+            return angle < std::acos(l.spot_cos_half) + std::atan2(l.radius, dist);
         }
         case LightType::Sun:
             return l.sun_half_angle > 0 && dot(l.to_sun, n) > -std::sin(l.sun_half_angle);

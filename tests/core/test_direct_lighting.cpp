@@ -463,3 +463,26 @@ TEST_CASE("an emissive mesh lights receivers and does not shadow itself", "[dire
         }
     }
 }
+
+TEST_CASE("a rect light rotated in float32 is sampled by solid angle like any other",
+          "[direct]") {
+    // Edges from a float32 rotation matrix are perpendicular only to ~1e-8
+    // relative (as Blender's world matrices leave them).
+    const float cz = std::cos(0.7f), sz = std::sin(0.7f), cx = std::cos(0.3f), sx = std::sin(0.3f);
+    const float r[3][3] = {{cz, -sz * cx, sz * sx}, {sz, cz * cx, -cz * sx}, {0.f, sx, cx}};
+    auto rotate = [&](float a, float b, float d) {
+        return Vec3(r[0][0] * a + r[0][1] * b + r[0][2] * d, r[1][0] * a + r[1][1] * b + r[1][2] * d,
+                    r[2][0] * a + r[2][1] * b + r[2][2] * d);
+    };
+    const Vec3 u = rotate(1.f, 0.f, 0.f), v = rotate(0.f, 0.5f, 0.f);
+    REQUIRE(dot(u, v) != 0.0);
+    const Vec3 corner(-0.3, -0.2, 1.0);
+    Scene scene;
+    scene.add_light(make_rect_light(corner, v, u, Vec3(2, 2, 2), false, kPi));  // faces −z
+    scene.commit();
+    const Vec3 x(0.1, 0.05, 0), n(0, 0, 1);
+    const double exact =
+        2 * polygon_irradiance(x, n, {corner, corner + u, corner + u + v, corner + v}) / kPi;
+    const Estimate e = light_copies(scene, x, n, {"uniform/solid-angle"}, {8}, 2, Strategy::Balance);
+    CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error + 1e-6 * exact);
+}

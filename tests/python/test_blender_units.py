@@ -208,3 +208,13 @@ def test_invalid_arguments_name_the_argument(call, name):
     with pytest.raises(ValueError) as err:
         call()
     assert name in str(err.value)
+
+
+def test_blenders_float32_pi_is_pi():
+    # Blender stores the default spread and the widest spot as float32 π.
+    pi32 = float(np.float32(math.pi))
+    assert pi32 > math.pi
+    assert bu.area_spread_normalization(pi32) == bu.area_spread_normalization(math.pi)
+    assert bu.spot_cone(pi32, 0.1) == bu.spot_cone(math.pi, 0.1)
+    with pytest.raises(ValueError, match="spread"):
+        bu.area_spread_normalization(3.2)

@@ -1,0 +1,253 @@
+"""One bake: export (main thread) -> native bakes (any thread) -> write-back (main thread).
+
+    job = BakeJob(context, objects, settings)   # validates and exports; BakeError
+    job.run()                                   # or on a worker thread: start_thread()
+    stats = job.finish(context)                 # writes; BakeError / Cancelled
+
+``run`` touches no bpy data: it only calls omis on numpy arrays, so the modal
+operator can run it on a worker thread while Blender's UI stays responsive.
+Nothing is written unless every part of every object baked successfully.
+"""
+
+import threading
+import time
+
+import numpy as np
+
+from . import export, native, writeback
+from .errors import BakeError, Cancelled
+
+
+class _Unit:
+    """One native bake call: one omis mesh into one image, or onto its corners."""
+
+    def __init__(self, kind, part, target, weight):
+        self.kind = kind            # 'uv' or 'corner'
+        self.part = part
+        self.target = target
+        self.weight = float(max(weight, 1))
+        self.value = None
+        self.noise = None
+        self.mask = None
+        self.stats = None
+
+    @property
+    def label(self):
+        name = self.target.name if self.kind == 'uv' else self.target.attribute_name
+        return f'{self.part.object_name} → {name}'
+
+
+class BakeJob:
+    def __init__(self, context, objects, settings):
+        try:
+            omis = native.require()
+        except RuntimeError as exc:
+            raise BakeError(str(exc)) from None
+        self.omis = omis
+        self.settings = settings
+        if objects is None:
+            objects = list(context.selected_objects)
+        self.object_names = [ob.name for ob in objects]
+        try:
+            self.export = export.export_scene(context, objects, settings.target, omis=omis,
+                                              units=native.units)
+        except ValueError as exc:  # omis refused some exported value
+            raise BakeError(f"export failed: {exc}") from None
+        self.units = []
+        for target in self.export.images:
+            for part in target.parts:
+                self.units.append(_Unit('uv', part, target, target.width * target.height))
+        for target in self.export.attributes:
+            for part in target.parts:
+                self.units.append(_Unit('corner', part, target, 3 * part.triangles))
+        self._total_weight = sum(u.weight for u in self.units) or 1.0
+        self._done_weight = 0.0
+        self._current = None
+        self._cancel = threading.Event()
+        self._external_progress = None
+        self.fraction = 0.0
+        self.current_label = ""
+        self.done = False
+        self.cancelled = False
+        self.error = None
+        self.seconds = 0.0
+        self.thread = None
+
+    # -- control (any thread) --
+
+    def cancel(self):
+        self._cancel.set()
+
+    @property
+    def cancel_requested(self):
+        return self._cancel.is_set()
+
+    def _progress(self, fraction):
+        unit = self._current
+        w = unit.weight if unit is not None else 0.0
+        self.fraction = min(1.0, (self._done_weight + w * float(fraction)) / self._total_weight)
+        if self._external_progress is not None:
+            answer = self._external_progress(self.fraction)
+            if answer is not None and not answer:
+                self._cancel.set()
+        return not self._cancel.is_set()
+
+    # -- the native work (any thread; no bpy) --
+
+    def run(self, progress=None):
+        """Commits the scene and bakes every unit. Never raises: sets error/cancelled."""
+        self._external_progress = progress
+        start = time.perf_counter()
+        s = self.settings
+        omis = self.omis
+        try:
+            self.export.scene.commit()
+            common = dict(strategy=s.strategy, beta=float(s.power_beta),
+                          cutoff=float(s.cutoff_threshold), samples=int(s.samples),
+                          seed=int(s.seed), smooth_normals=True,
+                          noise_target=float(s.noise_target) if s.use_noise_target else None,
+                          progress=self._progress)
+            names = s.technique_names()
+            if names is not None:
+                common["techniques"] = names
+            remaining_weight = self._total_weight
+            for unit in self.units:
+                if self._cancel.is_set():
+                    raise omis.Cancelled("bake: cancelled")
+                self._current = unit
+                self.current_label = unit.label
+                budget = None
+                if s.time_budget > 0:
+                    left = s.time_budget - (time.perf_counter() - start)
+                    budget = max(left * unit.weight / remaining_weight, 1e-3)
+                if unit.kind == 'uv':
+                    result = omis.bake_uv(self.export.scene, unit.part.mesh_id,
+                                          unit.target.width, unit.target.height,
+                                          margin=int(s.margin), time_budget=budget, **common)
+                else:
+                    result = omis.bake_vertices(self.export.scene, unit.part.mesh_id,
+                                                domain="CORNER", time_budget=budget, **common)
+                unit.value = np.array(result.value, np.float32)
+                unit.mask = np.array(result.mask, np.float32)
+                unit.noise = np.array(result.noise, np.float32)
+                unit.stats = dict(result.stats)
+                self._done_weight += unit.weight
+                remaining_weight -= unit.weight
+                self.fraction = self._done_weight / self._total_weight
+            self._current = None
+        except omis.Cancelled:
+            self.cancelled = True
+        except KeyboardInterrupt:
+            self.cancelled = True
+        except Exception as exc:  # reported to the artist, never half-written
+            self.error = f"{type(exc).__name__}: {exc}" if not isinstance(
+                exc, (ValueError, RuntimeError)) else str(exc)
+        finally:
+            self.seconds = time.perf_counter() - start
+            self.done = True
+
+    def start_thread(self):
+        """Runs run() on a daemon worker thread; poll .done / .fraction from the main thread."""
+        self.thread = threading.Thread(target=self.run, name="omis-bake", daemon=True)
+        self.thread.start()
+        return self.thread
+
+    # -- results (main thread) --
+
+    def finish(self, context):
+        """Writes every result, stores the summary in scene.omis, returns the stats dict."""
+        if self.thread is not None:
+            self.thread.join()
+        if not self.done:
+            raise RuntimeError("finish() before the bake ran")
+        if self.cancelled:
+            raise Cancelled("bake cancelled: no image or attribute was changed")
+        if self.error is not None:
+            raise BakeError(f"bake failed: {self.error} (no image or attribute was changed)")
+        s = self.settings
+        writers = []
+        try:
+            for target in self.export.images:
+                parts = [(u.value, u.mask) for u in self.units
+                         if u.kind == 'uv' and u.target is target]
+                writers.append(writeback.prepare_image(target, parts, int(s.margin),
+                                                       bool(s.use_clear)))
+            for target in self.export.attributes:
+                parts = [(u.value, u.part.tri_loops) for u in self.units
+                         if u.kind == 'corner' and u.target is target]
+                writers.append(writeback.prepare_attribute(target, parts))
+        except (ReferenceError, ValueError) as exc:
+            raise BakeError(f"cannot write the results: {exc} (nothing was changed)") from None
+        for write in writers:
+            write()
+        stats = self.stats()
+        store = context.scene.omis
+        store.last_status = stats["status"]
+        store.last_seconds = stats["seconds"]
+        store.last_samples_per_texel = stats["samples_per_texel"]
+        store.last_mean_error = stats["mean_relative_error"]
+        store.last_plan = stats["plan"]
+        return stats
+
+    def stats(self):
+        units = [u for u in self.units if u.stats is not None]
+        covered = sum(u.stats.get("covered", 0) for u in units)
+        samples = sum(u.stats.get("samples", 0) for u in units)
+        statuses = [u.stats.get("status", "complete") for u in units]
+        if "time budget reached" in statuses:
+            status = "time budget reached"
+        elif statuses and all(st == "noise target reached" for st in statuses):
+            status = "noise target reached"
+        else:
+            status = "complete"
+        mean_error = (sum(u.stats["mean_relative_error"] * u.stats.get("covered", 0)
+                          for u in units) / covered) if covered else 0.0
+        s = self.settings
+        return {
+            "status": status,
+            "seconds": self.seconds,
+            "bake_seconds": sum(u.stats.get("seconds", 0.0) for u in units),
+            "samples": samples,
+            "rays_traced": sum(u.stats.get("rays_traced", 0) for u in units),
+            "covered": covered,
+            "samples_per_texel": samples / covered if covered else 0.0,
+            "mean_relative_error": mean_error,
+            "max_relative_error": max((u.stats["max_relative_error"] for u in units),
+                                      default=0.0),
+            "passes": max((u.stats.get("passes", 0) for u in units), default=0),
+            "plan": units[0].stats.get("plan", "") if units else "",
+            "strategy": s.strategy,
+            "techniques": s.technique_names(),
+            "target": s.target,
+            "objects": list(self.object_names),
+            "images": [t.name for t in self.export.images],
+            "attributes": [f"{t.object_name}:{t.attribute_name}" for t in self.export.attributes],
+            "units": [dict(u.stats, label=u.label) for u in units],
+            "warnings": list(self.export.warnings),
+            "exported": dict(self.export.counts),
+        }
+
+
+def bake(context, objects=None, *, progress=None, **settings):
+    """Bakes `objects` (default: the selected objects) with omis; returns the stats dict.
+
+    settings: any of scene.omis' settings (use_optimal_mis, optimal_mode,
+    heuristic, power_beta, cutoff_threshold, technique_mode, techniques,
+    samples, time_budget, use_noise_target, noise_target, target, margin,
+    use_clear, seed); the rest come from context.scene.omis. techniques takes
+    identifiers ('UNOCCLUDED_SOLID_ANGLE') or SPEC names ('unoccluded/solid-angle');
+    giving techniques implies technique_mode='MANUAL'.
+    progress: optional callable(fraction) -> bool, called on this thread;
+    returning False cancels. Raises BakeError or Cancelled; on either, no image
+    or attribute is changed. Runs synchronously (also in background mode).
+    """
+    from .settings import settings_from
+    if "techniques" in settings and "technique_mode" not in settings:
+        settings["technique_mode"] = 'MANUAL'
+    try:
+        s = settings_from(context.scene.omis, settings)
+    except ValueError as exc:
+        raise BakeError(str(exc)) from None
+    job = BakeJob(context, objects, s)
+    job.run(progress=progress)
+    return job.finish(context)

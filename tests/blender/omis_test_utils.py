@@ -1,0 +1,216 @@
+"""Helpers shared by the headless Blender tests (run through scripts/blender_run.sh)."""
+
+import math
+import sys
+import tempfile
+import time
+
+import bpy
+import numpy as np
+
+RESULTS = []
+
+
+def args():
+    """The script's own arguments (after Blender's `--`)."""
+    argv = sys.argv
+    return argv[argv.index("--") + 1:] if "--" in argv else []
+
+
+def check(condition, message):
+    if not condition:
+        raise AssertionError(message)
+
+
+def reset_scene(engine='CYCLES'):
+    """An empty scene (the add-on stays registered, unlike read_factory_settings)."""
+    for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.lights, bpy.data.materials,
+                       bpy.data.images, bpy.data.cameras, bpy.data.collections):
+        for item in list(collection):
+            collection.remove(item)
+    scene = bpy.context.scene
+    scene.world = None
+    scene.render.engine = engine
+    c = scene.cycles
+    c.device = 'CPU'
+    c.use_denoising = False
+    c.use_adaptive_sampling = False
+    c.sample_clamp_direct = 0.0
+    c.sample_clamp_indirect = 0.0
+    c.seed = 0
+    return scene
+
+
+def link(ob):
+    bpy.context.scene.collection.objects.link(ob)
+    return ob
+
+
+def make_image(name, size=64, float_buffer=True, color=(0.0, 0.0, 0.0, 1.0)):
+    img = bpy.data.images.new(name, size, size, float_buffer=float_buffer, alpha=True)
+    img.generated_color = color
+    return img
+
+
+def image_material(name, image):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    node = mat.node_tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    mat.node_tree.nodes.active = node
+    return mat
+
+
+def grid_mesh(name, size=2.0, cuts=1, location=(0, 0, 0), uv_rect=(0, 0, 1, 1)):
+    """A square of side `size` in the XY plane facing +Z, UVs spanning uv_rect."""
+    n = cuts + 1
+    xs = np.linspace(-size / 2, size / 2, n + 1)
+    verts = [(x, y, 0.0) for y in xs for x in xs]
+    faces = [(j * (n + 1) + i, j * (n + 1) + i + 1, (j + 1) * (n + 1) + i + 1,
+              (j + 1) * (n + 1) + i) for j in range(n) for i in range(n)]
+    me = bpy.data.meshes.new(name)
+    me.from_pydata(verts, [], faces)
+    uv = me.uv_layers.new(name="UVMap")
+    u0, v0, u1, v1 = uv_rect
+    co = np.array(verts)
+    for loop in me.loops:
+        x, y, _ = co[loop.vertex_index]
+        uv.data[loop.index].uv = (u0 + (u1 - u0) * (x / size + 0.5),
+                                  v0 + (v1 - v0) * (y / size + 0.5))
+    ob = link(bpy.data.objects.new(name, me))
+    ob.location = location
+    return ob
+
+
+def add_light(kind, name=None, energy=100.0, location=(0, 0, 1), rotation=(0, 0, 0), **props):
+    data = bpy.data.lights.new(name or kind.lower(), kind)
+    data.energy = energy
+    for key, value in props.items():
+        setattr(data, key, value)
+    ob = link(bpy.data.objects.new(name or kind.lower(), data))
+    ob.location = location
+    ob.rotation_euler = rotation
+    return ob
+
+
+def add_box(name, size, location):
+    bpy.ops.mesh.primitive_cube_add(size=1.0, location=location)
+    ob = bpy.context.active_object
+    ob.name = name
+    ob.scale = size
+    return ob
+
+
+def select_only(objects):
+    for ob in bpy.context.view_layer.objects:
+        ob.select_set(False)
+    for ob in objects:
+        ob.select_set(True)
+    if objects:
+        bpy.context.view_layer.objects.active = objects[0]
+
+
+def pixels(image):
+    w, h = image.size
+    px = np.empty(w * h * image.channels, np.float32)
+    image.pixels.foreach_get(px)
+    return px.reshape(h, w, image.channels)
+
+
+def set_pixels(image, value):
+    px = np.empty(image.size[0] * image.size[1] * image.channels, np.float32)
+    px[:] = np.tile(np.asarray(value, np.float32), image.size[0] * image.size[1])
+    image.pixels.foreach_set(px)
+
+
+def cycles_bake(objects, samples, seed):
+    """Cycles' Diffuse bake, Direct only, no Color: E_direct/π into the active images."""
+    scene = bpy.context.scene
+    scene.cycles.samples = samples
+    scene.cycles.seed = seed
+    select_only(objects)
+    start = time.perf_counter()
+    result = bpy.ops.object.bake(type='DIFFUSE', pass_filter={'DIRECT'}, margin=0,
+                                 use_clear=True, target='IMAGE_TEXTURES', save_mode='INTERNAL',
+                                 use_selected_to_active=False)
+    check(result == {'FINISHED'}, f"Cycles bake failed: {result}")
+    return time.perf_counter() - start
+
+
+def box_mean(values, weights, radius):
+    """Mean of values over a (2r+1)² window, weighted (0/1) — separable cumulative sums."""
+    def box(a):
+        k = 2 * radius + 1
+        p = np.pad(a, radius, mode='constant')
+        c = np.cumsum(np.cumsum(p, axis=0), axis=1)
+        c = np.pad(c, ((1, 0), (1, 0)))
+        return c[k:, k:] - c[:-k, k:] - c[k:, :-k] + c[:-k, :-k]
+    num, den = box(values * weights), box(weights.astype(np.float64))
+    return np.where(den > 0, num / np.maximum(den, 1), 0)
+
+
+def compare_to_cycles(label, omis_value, omis_noise, omis_mask, cycles_a, cycles_b,
+                      tolerance_sigma=4.0, min_pass=0.99, max_bias=0.01):
+    """Per covered interior texel: |omis − cycles| ≤ 4σ + δ, with σ² the two noise
+    variances and δ half the largest step to a neighbour (Cycles box-filters each
+    texel, omis samples its centre; the two differ by up to that much at a shadow
+    edge). Aggregate relative bias < 1 %. Values: grey = mean of RGB."""
+    o = omis_value.astype(np.float64).mean(axis=2)
+    a = cycles_a[..., :3].astype(np.float64).mean(axis=2)
+    b = cycles_b[..., :3].astype(np.float64).mean(axis=2)
+    c = 0.5 * (a + b)
+    mask = omis_mask > 0.5
+    interior = mask.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            interior &= np.roll(np.roll(mask, dy, 0), dx, 1)
+    interior[0, :] = interior[-1, :] = interior[:, 0] = interior[:, -1] = False
+    var_c = box_mean(0.25 * (a - b) ** 2, interior, 3)          # variance of the mean c
+    var_o = (omis_noise.astype(np.float64) * o) ** 2
+    sigma = np.sqrt(var_c + var_o)
+    step = np.zeros_like(o)
+    for axis in (0, 1):
+        for shift in (-1, 1):
+            step = np.maximum(step, np.abs(np.roll(o, shift, axis) - o))
+    delta = 0.5 * step
+    err = np.abs(o - c)
+    ok = err <= tolerance_sigma * sigma + delta
+    n = int(interior.sum())
+    check(n > 100, f"{label}: only {n} interior texels")
+    passed = float(ok[interior].mean())
+    bias = float((o[interior].sum() - c[interior].sum()) / c[interior].sum())
+    # Diagnostic only: ≈ 1 where the lighting is smooth at texel scale; edges
+    # (where the two texel filters differ) push it up.
+    z2 = float(np.median(((o - c) / np.maximum(sigma, 1e-12))[interior] ** 2) / 0.4549)
+    row = {"scene": label, "texels": n, "pass_fraction": passed, "relative_bias": bias,
+           "median_z2_scaled": z2, "omis_rel_noise": float(np.median(omis_noise[interior])),
+           "cycles_rel_noise": float(np.median(np.sqrt(var_c[interior]) /
+                                               np.maximum(c[interior], 1e-12))),
+           "mean_value": float(c[interior].mean())}
+    RESULTS.append(row)
+    print(f"AGREEMENT {label}: texels {n}, within 4σ+δ {100 * passed:.2f} %, "
+          f"relative bias {100 * bias:+.3f} %, median z²/0.455 {z2:.2f}, "
+          f"median rel. noise omis {100 * row['omis_rel_noise']:.2f} % / Cycles "
+          f"{100 * row['cycles_rel_noise']:.2f} %, mean value {row['mean_value']:.4f}")
+    worst = np.argsort(-(err - tolerance_sigma * sigma - delta)[interior])[:5]
+    if passed < min_pass or abs(bias) >= max_bias:
+        ys, xs = np.nonzero(interior)
+        for i in worst:
+            y, x = ys[i], xs[i]
+            print(f"  texel ({x},{y}): omis {o[y, x]:.5f} cycles {c[y, x]:.5f} "
+                  f"(a {a[y, x]:.5f} b {b[y, x]:.5f}) σ {sigma[y, x]:.5f} δ {delta[y, x]:.5f}")
+    check(passed >= min_pass, f"{label}: only {100 * passed:.2f} % of texels agree with Cycles")
+    check(abs(bias) < max_bias, f"{label}: aggregate relative bias {100 * bias:+.3f} % ≥ 1 %")
+    return row
+
+
+def temp_dir():
+    return tempfile.mkdtemp(prefix="omis_blender_test_")
+
+
+def deg(x):
+    return math.radians(x)
+
+
+def report_time(name, start):
+    print(f"TIME {name}: {time.perf_counter() - start:.2f} s")
