@@ -280,26 +280,23 @@ void MisEstimator::finish_round() {
     std::fill(round_c_.begin(), round_c_.end(), 0.0);
 
     // α for the next round, from every round so far.
-    const Moments moments = normalized_moments();
-    SolveResult solved = solve_optimal_alpha(N_, C_, moments.a.data(), moments.b.data(),
-                                             moments.m.data(),
-                                             counts_.data(),
-                                             double(rounds_) * samples_per_round_);
-    round_alpha_ = std::move(solved.alpha);
+    Moments moments;
+    normalized_moments(moments);
+    const SolveResult solved = solve_optimal_alpha(N_, C_, moments.a.data(), moments.b.data(),
+                                                   moments.m.data(), counts_.data(),
+                                                   double(rounds_) * samples_per_round_);
+    round_alpha_.assign(solved.alpha.begin(), solved.alpha.begin() + N_ * C_);
     last_rank_ = solved.rank;
 }
 
-MisEstimator::Moments MisEstimator::normalized_moments() const {
-    // Divided by the rounds so far: the solver's step rule relies on
-    // Σ_i n_i a_ij ≈ 1, which holds for the per-round normalisation only.
+void MisEstimator::normalized_moments(Moments& out) const {
+    // Divided by the rounds so far: the solver's rules rely on Σ_i n_i a_ij ≈ 1,
+    // which holds for the per-round normalisation only.
     const double R = rounds_;
-    Moments out{std::vector<double>(N_ * N_), std::vector<double>(N_ * C_),
-                std::vector<double>(C_)};
     for (int i = 0; i < N_; ++i)
         for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = a_[i * N_ + j] / R;
-    for (size_t i = 0; i < out.b.size(); ++i) out.b[i] = b_[i] / R;
+    for (int i = 0; i < N_ * C_; ++i) out.b[i] = b_[i] / R;
     for (int c = 0; c < C_; ++c) out.m[c] = m_[c] / R;
-    return out;
 }
 
 double MisEstimator::correction(const double* alpha, int c, const double* c_sums,
@@ -326,6 +323,12 @@ double MisEstimator::correction(const double* alpha, int c, const double* c_sums
     return sum;
 }
 
+double MisEstimator::control_variate(const double* alpha, int c) const {
+    double balance = 0;
+    for (int k = 0; k < N_; ++k) balance += sum_y_[k * C_ + c];
+    return balance / rounds_ + correction(alpha, c, c_.data(), rounds_);
+}
+
 std::vector<double> MisEstimator::control_variate_estimate(
     const std::vector<double>& alpha) const {
     if (!is_optimal(strategy_))
@@ -336,11 +339,7 @@ std::vector<double> MisEstimator::control_variate_estimate(
                                     [](int v) { return v != 0; }))
         throw std::logic_error("estimate: needs complete rounds");
     std::vector<double> out(C_);
-    for (int c = 0; c < C_; ++c) {
-        double balance = 0;
-        for (int k = 0; k < N_; ++k) balance += sum_y_[k * C_ + c];
-        out[c] = balance / rounds_ + correction(alpha.data(), c, c_.data(), rounds_);
-    }
+    for (int c = 0; c < C_; ++c) out[c] = control_variate(alpha.data(), c);
     return out;
 }
 
@@ -372,11 +371,13 @@ MisResult MisEstimator::result() const {
 
     switch (strategy_) {
         case Strategy::OptimalDirect: {
-            const Moments mo = normalized_moments();
-            SolveResult solved = solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(),
-                                                     counts_.data(), R * samples_per_round_);
+            Moments mo;
+            normalized_moments(mo);
+            const SolveResult solved =
+                solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(),
+                                    counts_.data(), R * samples_per_round_);
             out.rank = solved.rank;
-            out.estimate = control_variate_estimate(solved.alpha);
+            for (int c = 0; c < C_; ++c) out.estimate[c] = control_variate(solved.alpha.data(), c);
             // Kept α: the unbiased residual variance of the fit times the cost of
             // estimating α (solver.h, rule 3); otherwise the estimate is the
             // balance heuristic's, and so is its variance.

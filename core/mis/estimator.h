@@ -5,6 +5,7 @@
 // Memory is O(N² + N·C) whatever the sample count; sums are in double.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -58,10 +59,16 @@ public:
 
 private:
     void finish_round();
+    // Full symmetric Â, b̂, m̂ divided by R, in fixed storage (no allocation
+    // per point); only the leading N×N, N×C and C entries are set.
     struct Moments {
-        std::vector<double> a, b, m;  // full symmetric Â, b̂, m̂, divided by R
+        std::array<double, kMaxMisTechniques * kMaxMisTechniques> a;
+        std::array<double, kMaxMisTechniques * kMaxMisChannels> b;
+        std::array<double, kMaxMisChannels> m;
     };
-    Moments normalized_moments() const;
+    void normalized_moments(Moments& out) const;
+    // Balance estimate plus the control-variate correction for α (N×C).
+    double control_variate(const double* alpha, int c) const;
     // Σ_k β_k (1 − c_k/R) per channel with β = α less its inert n-component.
     double correction(const double* alpha, int c, const double* c_sums,
                       double rounds) const;

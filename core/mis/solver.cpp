@@ -9,8 +9,8 @@ namespace {
 
 // Numerical rank threshold on unit-diagonal pivots (see solver.h, rule 3).
 constexpr double kPivotThreshold = 1e-10;
-constexpr int kMaxTechniques = 32;
-constexpr int kMaxChannels = 4;
+constexpr int kMaxTechniques = kMaxSolveTechniques;
+constexpr int kMaxChannels = kMaxSolveChannels;
 
 }  // namespace
 
@@ -55,8 +55,8 @@ SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
                                 const double* m, const int* counts,
                                 double total_samples) {
     SolveResult result;
-    result.alpha.assign(static_cast<size_t>(N) * C, 0.0);
-    result.kept.assign(C, false);
+    std::fill(result.alpha.begin(), result.alpha.begin() + std::min(N * C, int(result.alpha.size())),
+              0.0);
     if (N > kMaxTechniques || C > kMaxChannels) return result;  // rule 2
 
     // Rule 1 and the unit-diagonal scaling: work on the techniques that were seen.

@@ -33,16 +33,22 @@
 // proportional to n, up to rounding, *is* the balance heuristic.
 #pragma once
 
+#include <array>
 #include <cstddef>
-#include <vector>
 
 namespace omis {
 
+constexpr int kMaxSolveTechniques = 32;
+constexpr int kMaxSolveChannels = 4;
+
+// Fixed-size storage: a solve runs once per shading point, and heap
+// allocations would cost about as much as the solve itself.
 struct SolveResult {
-    std::vector<double> alpha;  // N×C, α for channel c at [k*C + c]
+    // α of technique k, channel c at [k*C + c]; only the first N·C entries are set.
+    std::array<double, kMaxSolveTechniques * kMaxSolveChannels> alpha;
     int rank = 0;               // techniques kept by the pivoted factorisation
     int free_coefficients = 0;  // k of rule 3
-    std::vector<bool> kept;     // per channel: false when rule 3 fell back to balance
+    std::array<bool, kMaxSolveChannels> kept{};  // per channel: false when rule 3 fell back to balance
 };
 
 // Moments accumulated over the samples (all divided by R, or all not):
