@@ -1,0 +1,371 @@
+"""Equal-time benchmark: omis (balance, optimal-direct) against Cycles' own bake.
+
+    bash scripts/blender_run.sh bench/bench_cycles.py [--out DIR] [--quick]
+        [--scenes a,b,...] [--budgets 0.25,0.5,1,2] [--ref-seconds S] [--size N]
+
+Scenes: those of the Cycles-agreement test (tests/blender/cycles_scenes.py;
+spot_radius is left out: omis and Cycles differ there by design, see the test)
+plus the demo room (scripts/blender_demo.py), all baked into one float image.
+
+Per scene:
+- Cycles: Diffuse bake, pass filter {DIRECT}, denoising and adaptive sampling
+  off, margin 0. Its time per sample is measured first (t = t0 + k·spp, from
+  two bakes); for a budget T it gets spp = max(1, round((T − t0)/k)), so its
+  whole operator call (sync, BVH, sampling, write-back) takes about T.
+- omis: the add-on's BakeJob (export + native bake + write-back, as
+  omis_bake.bake does) with time_budget = T, the effect plan's techniques,
+  margin 0; strategies balance and optimal-direct.
+- Times on the plot are measured wall times of the whole bake call for both.
+- References (converged): one per renderer, because Cycles box-filters each
+  texel over its footprint while omis samples the texel centre (they differ at
+  shadow edges, see compare_to_cycles): Cycles at high spp for Cycles, omis
+  balance (unbiased) at a long time budget for omis; each reference is the mean
+  of two independent halves, whose difference estimates the reference's own
+  noise, which is subtracted from every relMSE (printed as `ref floor`).
+  The two references are checked against each other (aggregate bias and the
+  share of texels agreeing within 4σ + δ, as the agreement test does).
+- relMSE = mean over covered interior texels of (x − r)² / (r² + ε²), grey =
+  mean of RGB, ε = 0.01 · mean(r) (keeps the fully shadowed texels finite).
+
+Writes DIR/bench_cycles.csv, DIR/bench_cycles.png (relMSE vs time, log-log, one
+panel per scene) and DIR/table.txt.
+"""
+
+import argparse
+import csv
+import importlib.util
+import os
+import sys
+import time
+
+import bpy
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+import omis_test_utils as U  # noqa: E402
+import cycles_scenes  # noqa: E402
+
+from omis_bake.job import BakeJob  # noqa: E402
+from omis_bake.settings import settings_from  # noqa: E402
+
+
+def _load_demo():
+    spec = importlib.util.spec_from_file_location(
+        "blender_demo", os.path.join(ROOT, "scripts", "blender_demo.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def scene_demo(size):
+    demo = _load_demo()
+    floor, _ = demo.build_demo(size)
+    return [floor]
+
+
+SCENES = {name: cycles_scenes.SCENES[name] for name in
+          ("area", "area_round", "point_spot", "sun_occluder", "shared_image",
+           "emission_world")}
+SCENES["demo_room"] = scene_demo
+
+STRATEGIES = ("cycles", "omis balance", "omis optimal")
+
+
+def log(text=""):
+    print(text, flush=True)
+
+
+def script_args():
+    argv = sys.argv
+    rest = argv[argv.index("--") + 1:] if "--" in argv else []
+    return rest[1:] if rest[:1] == ["--"] else rest
+
+
+def grey(image):
+    return U.pixels(image)[..., :3].astype(np.float64).mean(axis=2)
+
+
+def cycles_run(objects, image, spp, seed):
+    U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
+    seconds = U.cycles_bake(objects, int(spp), seed)
+    return grey(image), seconds
+
+
+def omis_run(objects, image, strategy, seed, seconds=0.0, samples=1 << 30):
+    U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
+    U.select_only(objects)
+    overrides = {"samples": int(samples), "time_budget": float(seconds), "margin": 0,
+                 "seed": int(seed), "use_noise_target": False, "technique_mode": 'AUTO',
+                 "use_clear": True}
+    if strategy == "balance":
+        overrides.update(use_optimal_mis=False, heuristic='BALANCE')
+    else:
+        overrides.update(use_optimal_mis=True, optimal_mode='DIRECT')
+    start = time.perf_counter()
+    job = BakeJob(bpy.context, objects, settings_from(bpy.context.scene.omis, overrides))
+    job.run()
+    stats = job.finish(bpy.context)
+    wall = time.perf_counter() - start
+    mask = np.zeros((image.size[1], image.size[0]), bool)
+    for unit in job.units:
+        mask |= unit.mask > 0.5
+    return grey(image), wall, stats, mask
+
+
+def interior(mask):
+    m = mask.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            m &= np.roll(np.roll(mask, dy, 0), dx, 1)
+    m[0, :] = m[-1, :] = m[:, 0] = m[:, -1] = False
+    return m
+
+
+class Reference:
+    """Mean of two independent halves; knows its own per-texel variance."""
+
+    def __init__(self, a, b, mask):
+        self.value = 0.5 * (a + b)
+        self.var = 0.25 * (a - b) ** 2      # unbiased estimate of Var(mean of a, b)
+        self.mask = mask
+        self.eps2 = (0.01 * self.value[mask].mean()) ** 2
+
+    def rel_mse(self, x):
+        m = self.mask
+        r = self.value[m]
+        d = (x[m] - r) ** 2 - self.var[m]   # subtract the reference's own noise
+        return float(np.mean(d / (r * r + self.eps2)))
+
+    def floor(self):
+        m = self.mask
+        r = self.value[m]
+        return float(np.mean(self.var[m] / (r * r + self.eps2)))
+
+
+def calibrate_cycles(objects, image, quick):
+    """Cycles' operator time as t0 + k·spp, from bakes at two sample counts."""
+    lo, hi = (1, 16) if quick else (2, 64)
+    cycles_run(objects, image, 1, 99)                     # warm-up (kernels, caches)
+    _, t_lo = cycles_run(objects, image, lo, 98)
+    _, t_hi = cycles_run(objects, image, hi, 97)
+    if t_hi / t_lo < 2.0 and not quick:                   # overhead-dominated: go further
+        hi *= 8
+        _, t_hi = cycles_run(objects, image, hi, 96)
+    k = max((t_hi - t_lo) / (hi - lo), 1e-6)
+    t0 = max(t_lo - k * lo, 0.0)
+    return t0, k
+
+
+def spp_for(seconds, t0, k):
+    return max(1, int(round((seconds - t0) / k)))
+
+
+def agreement(ref_c, ref_o, mask):
+    """Cycles reference vs omis reference: aggregate bias and the share of texels
+    within 4σ + δ (δ: half the largest step to a neighbour, the texel-filter
+    difference at edges), as tests/blender/omis_test_utils.compare_to_cycles."""
+    c, o = ref_c.value, ref_o.value
+    sigma = np.sqrt(ref_c.var + ref_o.var)
+    sigma = np.sqrt(U.box_mean(sigma ** 2, mask, 3))      # smooth the 2-sample variance
+    step = np.zeros_like(o)
+    for axis in (0, 1):
+        for shift in (-1, 1):
+            step = np.maximum(step, np.abs(np.roll(o, shift, axis) - o))
+    ok = np.abs(o - c) <= 4 * sigma + 0.5 * step
+    bias = float((o[mask].sum() - c[mask].sum()) / c[mask].sum())
+    return bias, float(ok[mask].mean())
+
+
+def run_scene(name, args):
+    log(f"\n== {name} ==")
+    U.reset_scene()
+    builder = SCENES[name]
+    objects = builder(args.size)
+    bpy.context.view_layer.update()
+    (image,) = cycles_scenes.images_of(objects)
+
+    t0, k = calibrate_cycles(objects, image, args.quick)
+    log(f"  Cycles: {t0:.3f} s overhead + {1e3 * k:.2f} ms per spp "
+        f"({args.size}² image, {bpy.context.scene.cycles.device}, "
+        f"{bpy.context.scene.render.threads} threads)")
+
+    # omis' covered texels (the same UV islands Cycles bakes).
+    _, _, stats0, cover = omis_run(objects, image, "balance", 1, samples=1)
+    mask = interior(cover)
+    log(f"  plan: {stats0['plan'].splitlines()[-1].strip() if stats0['plan'] else '-'}; "
+        f"{int(mask.sum())} interior covered texels")
+
+    # References.
+    half = 0.5 * args.ref_seconds
+    ref_spp = spp_for(half, t0, k)
+    a, ta = cycles_run(objects, image, ref_spp, 1001)
+    b, tb = cycles_run(objects, image, ref_spp, 1002)
+    ref_c = Reference(a, b, mask)
+    a, ta2, sa, _ = omis_run(objects, image, "balance", 2001, seconds=half)
+    b, tb2, sb, _ = omis_run(objects, image, "balance", 2002, seconds=half)
+    ref_o = Reference(a, b, mask)
+    bias, agree = agreement(ref_c, ref_o, mask)
+    log(f"  references: Cycles 2×{ref_spp} spp ({ta + tb:.1f} s, floor relMSE "
+        f"{ref_c.floor():.2e}); omis balance 2×{sa['samples_per_texel']:.0f} samples/texel "
+        f"({ta2 + tb2:.1f} s, floor {ref_o.floor():.2e}); omis vs Cycles reference: bias "
+        f"{100 * bias:+.2f} %, {100 * agree:.1f} % of texels within 4σ+δ")
+
+    rows = []
+    for i, budget in enumerate(args.budgets):
+        spp = spp_for(budget, t0, k)
+        x, t = cycles_run(objects, image, spp, 10 + i)
+        rows.append(dict(scene=name, strategy="cycles", budget=budget, seconds=t,
+                         bake_seconds=t, samples_per_texel=spp, rel_mse=ref_c.rel_mse(x),
+                         ref_floor=ref_c.floor()))
+        for strategy, label in (("balance", "omis balance"), ("optimal-direct", "omis optimal")):
+            x, t, s, _ = omis_run(objects, image, strategy, 20 + i, seconds=budget)
+            rows.append(dict(scene=name, strategy=label, budget=budget, seconds=t,
+                             bake_seconds=s["bake_seconds"],
+                             samples_per_texel=s["samples_per_texel"],
+                             rel_mse=ref_o.rel_mse(x), ref_floor=ref_o.floor()))
+        r = rows[-3:]
+        log(f"  budget {budget:g} s: " + "; ".join(
+            f"{row['strategy']} {row['seconds']:.2f} s {row['samples_per_texel']:.0f} spp "
+            f"relMSE {row['rel_mse']:.2e}" for row in r))
+    summary = dict(scene=name, t0=t0, k=k, ref_bias=bias, ref_agree=agree,
+                   ref_spp=ref_spp, plan=stats0["plan"])
+    return rows, summary
+
+
+def cycles_at(rows, scene, seconds):
+    """Cycles' relMSE at a given time: power-law fit through its points (log-log)."""
+    pts = [(r["seconds"], r["rel_mse"]) for r in rows
+           if r["scene"] == scene and r["strategy"] == "cycles" and r["rel_mse"] > 0]
+    t = np.log([p[0] for p in pts])
+    e = np.log([p[1] for p in pts])
+    slope, intercept = np.polyfit(t, e, 1)
+    return float(np.exp(intercept + slope * np.log(seconds)))
+
+
+def table(rows, summaries, budgets):
+    lines = [f"{'scene':<15} {'budget':>6} {'strategy':<13} {'time (s)':>8} {'spp':>7} "
+             f"{'relMSE':>9} {'/Cycles':>8}"]
+    ratios = {}
+    for s in summaries:
+        scene = s["scene"]
+        for budget in budgets:
+            for r in rows:
+                if r["scene"] != scene or r["budget"] != budget:
+                    continue
+                ratio = r["rel_mse"] / cycles_at(rows, scene, r["seconds"])
+                r["ratio_vs_cycles"] = ratio
+                if r["strategy"] != "cycles":
+                    ratios.setdefault((scene, r["strategy"]), []).append(ratio)
+                lines.append(f"{scene:<15} {budget:>6g} {r['strategy']:<13} {r['seconds']:>8.2f} "
+                             f"{r['samples_per_texel']:>7.0f} {r['rel_mse']:>9.2e} "
+                             f"{ratio if r['strategy'] != 'cycles' else 1.0:>8.2f}")
+    lines.append("")
+    lines.append("relMSE of omis / relMSE of Cycles at equal wall time (geometric mean over the "
+                 "budgets; Cycles interpolated by a power-law fit; goal: optimal ≤ 0.5)")
+    lines.append(f"{'scene':<15} {'balance':>8} {'optimal':>8} {'goal':>5}  "
+                 f"{'Cycles t0 (s)':>13} {'ms/spp':>7} {'refs: bias':>10} {'agree':>6}")
+    for s in summaries:
+        scene = s["scene"]
+        b = float(np.exp(np.mean(np.log(ratios[(scene, "omis balance")]))))
+        o = float(np.exp(np.mean(np.log(ratios[(scene, "omis optimal")]))))
+        s["ratio_balance"], s["ratio_optimal"] = b, o
+        lines.append(f"{scene:<15} {b:>8.2f} {o:>8.2f} {'met' if o <= 0.5 else 'MISS':>5}  "
+                     f"{s['t0']:>13.3f} {1e3 * s['k']:>7.2f} {100 * s['ref_bias']:>+9.2f}% "
+                     f"{100 * s['ref_agree']:>5.1f}%")
+    return "\n".join(lines)
+
+
+def plot(path, rows, summaries):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import matplotlib.ticker  # noqa: F401
+
+    n = len(summaries)
+    cols = min(4, n)
+    nrows = (n + cols - 1) // cols
+    fig, axes = plt.subplots(nrows, cols, figsize=(4.2 * cols, 3.6 * nrows), squeeze=False)
+    styles = {"cycles": ("tab:gray", "s"), "omis balance": ("tab:blue", "o"),
+              "omis optimal": ("tab:red", "^")}
+    for ax, s in zip(axes.ravel(), summaries):
+        scene = s["scene"]
+        for strategy in STRATEGIES:
+            pts = sorted((r["seconds"], r["rel_mse"]) for r in rows
+                         if r["scene"] == scene and r["strategy"] == strategy)
+            color, marker = styles[strategy]
+            ax.loglog([p[0] for p in pts], [max(p[1], 1e-12) for p in pts], marker=marker,
+                      color=color, label=strategy)
+        pts = sorted(r["seconds"] for r in rows if r["scene"] == scene and
+                     r["strategy"] == "cycles")
+        half = [0.5 * cycles_at(rows, scene, t) for t in pts]
+        ax.loglog(pts, half, ":", color="tab:gray", label="0.5 × Cycles (goal)")
+        ax.set_title(f"{scene}  (optimal/Cycles {s['ratio_optimal']:.2f})", fontsize=10)
+        ax.set_xlabel("bake time (s, wall)")
+        ax.set_ylabel("relMSE")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.set_xticks(sorted({r["budget"] for r in rows}))
+    for ax in axes.ravel()[n:]:
+        ax.axis("off")
+    axes.ravel()[0].legend(fontsize=8)
+    fig.suptitle("Direct-lighting bake, equal time: Cycles vs omis (Blender "
+                 f"{bpy.app.version_string})")
+    fig.tight_layout()
+    tmp = path + ".tmp.png"
+    fig.savefig(tmp, dpi=100)
+    os.replace(tmp, path)
+
+
+def main():
+    parser = argparse.ArgumentParser(prog="bench_cycles.py", description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="out/bench_cycles")
+    parser.add_argument("--quick", action="store_true", help="smoke run (< 1 minute)")
+    parser.add_argument("--scenes", default=None, help="comma-separated; default: all")
+    parser.add_argument("--budgets", default=None, help="seconds, comma-separated")
+    parser.add_argument("--ref-seconds", type=float, default=None,
+                        help="time per reference (two halves), per renderer")
+    parser.add_argument("--size", type=int, default=None, help="image size (texels)")
+    args = parser.parse_args(script_args())
+    if args.quick:
+        scenes = ["area", "demo_room"]
+        budgets, ref_seconds, size = [0.1, 0.2, 0.4], 2.0, 64
+    else:
+        scenes = list(SCENES)
+        budgets, ref_seconds, size = [0.25, 0.5, 1.0, 2.0], 16.0, 128
+    if args.scenes:
+        scenes = args.scenes.split(",")
+    for name in scenes:
+        if name not in SCENES:
+            raise SystemExit(f"unknown scene {name!r}; known: {', '.join(SCENES)}")
+    args.budgets = [float(b) for b in args.budgets.split(",")] if args.budgets else budgets
+    args.ref_seconds = args.ref_seconds or ref_seconds
+    args.size = args.size or size
+    out = os.path.abspath(args.out)
+    os.makedirs(out, exist_ok=True)
+
+    start = time.perf_counter()
+    log(f"bench_cycles: scenes {', '.join(scenes)}; budgets {args.budgets} s; references "
+        f"{args.ref_seconds:g} s each; {args.size}² images")
+    rows, summaries = [], []
+    for name in scenes:
+        r, s = run_scene(name, args)
+        rows += r
+        summaries.append(s)
+    text = table(rows, summaries, args.budgets)
+    log("\n" + text)
+    with open(os.path.join(out, "table.txt"), "w") as f:
+        f.write(text + "\n")
+    with open(os.path.join(out, "bench_cycles.csv"), "w", newline="") as f:
+        fields = ["scene", "strategy", "budget", "seconds", "bake_seconds",
+                  "samples_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles"]
+        w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+    plot(os.path.join(out, "bench_cycles.png"), rows, summaries)
+    log(f"\nwrote {out}/: bench_cycles.csv, bench_cycles.png, table.txt "
+        f"({time.perf_counter() - start:.0f} s)")
+
+
+main()
