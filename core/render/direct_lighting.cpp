@@ -285,6 +285,21 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
         Pcg32 rng = point_stream(p_.settings.seed ^ mix64(pass), stream);
         const Frame frame(n);
         double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
+        // Each technique's draws at this point follow a randomly shifted R3
+        // sequence (Roberts 2018; Cranley–Patterson rotation): every draw is
+        // still uniform, so estimates stay unbiased, but the draws of one point
+        // spread evenly over the light and the hemisphere instead of
+        // clustering. Variance estimates, derived as for independent draws,
+        // become conservative.
+        double shift[kMaxMisTechniques][3];
+        for (std::size_t a = 0; a < active.size(); ++a)
+            for (double& s : shift[a]) s = rng.next_double();
+        auto draw = [&](std::size_t a, int index, int dim) {
+            static constexpr double kR3[3] = {0.8191725133961645, 0.6710436067037893,
+                                              0.5497004779019703};
+            const double u = shift[a][dim] + index * kR3[dim];
+            return u - std::floor(u);
+        };
 
         for (int r = 0; r < p_.settings.rounds; ++r) {
             for (std::size_t a = 0; a < active.size(); ++a) {
@@ -295,8 +310,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
                     : -1;
                 for (int j = 0; j < p_.settings.samples[k]; ++j) {
                     ++counters.samples;
-                    const double u0 = rng.next_double(), u1 = rng.next_double(),
-                                 u2 = rng.next_double();
+                    const int index = r * p_.settings.samples[k] + j;
+                    const double u0 = draw(a, index, 0), u1 = draw(a, index, 1),
+                                 u2 = draw(a, index, 2);
                     Vec3 w;
                     bool ok;
                     if (t.bsdf) {

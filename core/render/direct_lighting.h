@@ -80,7 +80,10 @@ public:
     PointLighting(const PointLighting&) = delete;
 
     // E/π and its estimated variance (RGB) at x with shading normal n, over
-    // settings.rounds rounds. ng, the geometric normal, places the ray origins;
+    // settings.rounds rounds. Each technique's draws at a point are a randomly
+    // shifted low-discrepancy (R3) sequence: unbiased, and far less noisy than
+    // independent draws; the variance is estimated as for independent draws,
+    // so it is an upper bound (independent passes give the true spread). ng, the geometric normal, places the ray origins;
     // (stream, pass) pick the random numbers, so any point can be re-shaded
     // with fresh, independent samples by changing pass.
     void shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x, const Vec3& n,
