@@ -73,26 +73,23 @@ std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth
 }
 
 // Running statistics of one point over passes, beside its running mean (kept
-// in the output image itself): the sum of the passes' reported variances and
-// the spread of the pass estimates (Welford), both of luminance. The spread
-// does not share the in-sample optimism a per-pass variance estimate can have
-// at low sample counts. 16 bytes a point.
+// in the output image itself, weighted by rounds): Σ rounds_p² · variance_p
+// of luminance, and the rounds done. 12 bytes a point.
 struct PointState {
     float variance_sum = 0;
-    float spread_mean = 0, spread_m2 = 0;
+    std::uint32_t rounds = 0;
     std::uint16_t passes = 0;
     bool done = false;
 };
 
-// A point may stop for the noise target only after this many passes: the
-// spread of fewer pass estimates says too little about their variance.
+// A point may stop for the noise target only after this many passes: a
+// variance estimated from one or two small passes says too little.
 constexpr int kMinPassesForNoiseTarget = 3;
 
 double relative_error(const PointState& s, const float* mean) {
-    if (s.passes == 0) return 0;
+    if (s.rounds == 0) return 0;
     const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
-    double var = double(s.variance_sum) / (double(s.passes) * s.passes);
-    if (s.passes >= 2) var = std::max(var, double(s.spread_m2) / (s.passes - 1) / s.passes);
+    const double var = double(s.variance_sum) / (double(s.rounds) * s.rounds);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
     return std::sqrt(std::max(0.0, var)) / value;
 }
@@ -158,15 +155,23 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     };
 
     // Passes: all rounds at once unless a time or noise budget wants to look
-    // between passes.
+    // between passes; then passes double in size (rounds_per_pass, twice that,
+    // ...), so budgets are checked often early on and the per-pass cost (one
+    // solve per point) stays small later. Each point's draws continue one
+    // low-discrepancy sequence across passes.
     const bool progressive = settings.time_budget > 0 || settings.noise_target > 0;
     const int total_rounds = std::max(1, settings.lighting.rounds);
-    const int pass_rounds = progressive ? std::min(settings.rounds_per_pass, total_rounds)
-                                        : total_rounds;
-    const int max_passes = (total_rounds + pass_rounds - 1) / pass_rounds;
-    DirectLightingSettings pass_settings = settings.lighting;
-    pass_settings.rounds = pass_rounds;
-    const LightingContext context(scene, pass_settings);
+    std::vector<int> pass_rounds;
+    for (int done = 0; done < total_rounds;) {
+        const long long doubled = (long long)settings.rounds_per_pass
+                                  << std::min<std::size_t>(pass_rounds.size(), 20);
+        const int size = progressive ? int(std::min<long long>(total_rounds - done, doubled))
+                                     : total_rounds;
+        pass_rounds.push_back(size);
+        done += size;
+    }
+    const int max_passes = int(pass_rounds.size());
+    const LightingContext context(scene, settings.lighting);
 
     std::vector<PointState> state(count);
     result.value.assign(count * 3, 0.f);  // the running means
@@ -200,7 +205,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // request stops the bake within one point's work.
     std::size_t to_shade = 0;
     for (std::size_t i = 0; i < count; ++i) to_shade += covered(i);
-    const double total_work = double(std::max<std::size_t>(1, to_shade)) * max_passes;
+    const double total_work = double(std::max<std::size_t>(1, to_shade)) * total_rounds;
     std::atomic<std::size_t> shaded{0};
     auto report_progress = [&] {
         double fraction = double(shaded.load(std::memory_order_relaxed)) / total_work;
@@ -229,20 +234,20 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                                             ? lightmap_point(mesh, coverage, i,
                                                              settings.smooth_normals)
                                             : points[i];
-                    shader.shade(i, std::uint64_t(pass), p.position, p.normal,
+                    const int rounds = pass_rounds[pass];
+                    shader.shade(i, int(s.rounds), rounds, p.position, p.normal,
                                  p.geometric_normal, value, variance);
                     ++s.passes;
+                    s.rounds += rounds;
+                    const double weight = double(rounds) / s.rounds;
                     float* mean = &result.value[3 * i];
-                    for (int c = 0; c < 3; ++c) mean[c] += float((value[c] - mean[c]) / s.passes);
-                    s.variance_sum += float(luminance(Vec3(variance[0], variance[1], variance[2])));
-                    const double lum = luminance(Vec3(value[0], value[1], value[2]));
-                    const double delta = lum - s.spread_mean;
-                    s.spread_mean += float(delta / s.passes);
-                    s.spread_m2 += float(delta * (lum - s.spread_mean));
+                    for (int c = 0; c < 3; ++c) mean[c] += float((value[c] - mean[c]) * weight);
+                    s.variance_sum += float(double(rounds) * rounds *
+                                            luminance(Vec3(variance[0], variance[1], variance[2])));
                     if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
                         relative_error(s, mean) <= settings.noise_target)
                         s.done = true;
-                    if (progress && (shaded.fetch_add(1, std::memory_order_relaxed) & 31) == 0)
+                    if (progress && (shaded.fetch_add(rounds, std::memory_order_relaxed) % 64) < std::size_t(rounds))
                         report_progress();
                 });
             }

@@ -38,7 +38,7 @@ struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
         : p_(context), counters(counters), choices_(context.settings.techniques.size()) {}
 
-    void shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x, const Vec3& n,
+    void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double* value, double* variance);
 
     struct Integrand {
@@ -240,8 +240,8 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     return it->second;
 }
 
-void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x,
-                                const Vec3& n, const Vec3& ng, double* value,
+void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
+                                const Vec3& x, const Vec3& n, const Vec3& ng, double* value,
                                 double* variance) {
     Vec3 total, total_variance;
     const GeometryScene& geometry = p_.scene.geometry();
@@ -282,7 +282,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
         const bool hidden = p_.plan.bsdf_invisible_lights && !active_lights.empty();
         MisEstimator* hidden_est = hidden ? &estimator(hidden_cache_, light_mask, active_lights)
                                           : nullptr;
-        Pcg32 rng = point_stream(p_.settings.seed ^ mix64(pass), stream);
+        Pcg32 rng = point_stream(p_.settings.seed, stream);
         const Frame frame(n);
         double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
         // Each technique's draws at this point follow a randomly shifted R3
@@ -301,7 +301,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, std::uint64_t pass, const 
             return u - std::floor(u);
         };
 
-        for (int r = 0; r < p_.settings.rounds; ++r) {
+        for (int r = first_round; r < first_round + rounds; ++r) {
             for (std::size_t a = 0; a < active.size(); ++a) {
                 const int k = active[a];
                 const Technique& t = p_.settings.techniques[k];
@@ -408,10 +408,10 @@ PointLighting::PointLighting(PointLighting&& other) noexcept
     if (impl_) impl_ = std::make_unique<Impl>(impl_->p_, counters);
 }
 
-void PointLighting::shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x,
+void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
                           const Vec3& n, const Vec3& ng, double value[3],
                           double variance[3]) {
-    impl_->shade(stream, pass, x, n, ng, value, variance);
+    impl_->shade(stream, first_round, rounds, x, n, ng, value, variance);
 }
 
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,
@@ -436,7 +436,7 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, 0, x, n, n, value + 3 * i, variance + 3 * i);
+            shader.shade(i, 0, settings.rounds, x, n, n, value + 3 * i, variance + 3 * i);
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {

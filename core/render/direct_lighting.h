@@ -79,14 +79,15 @@ public:
     PointLighting(PointLighting&&) noexcept;
     PointLighting(const PointLighting&) = delete;
 
-    // E/π and its estimated variance (RGB) at x with shading normal n, over
-    // settings.rounds rounds. Each technique's draws at a point are a randomly
-    // shifted low-discrepancy (R3) sequence: unbiased, and far less noisy than
-    // independent draws; the variance is estimated as for independent draws,
-    // so it is an upper bound (independent passes give the true spread). ng, the geometric normal, places the ray origins;
-    // (stream, pass) pick the random numbers, so any point can be re-shaded
-    // with fresh, independent samples by changing pass.
-    void shade(std::uint64_t stream, std::uint64_t pass, const Vec3& x, const Vec3& n,
+    // E/π and its estimated variance (RGB) at x with shading normal n, from
+    // rounds [first_round, first_round + rounds) of this point's draws. Each
+    // technique's draws at a point are one randomly shifted low-discrepancy
+    // (R3) sequence, fixed by (seed, stream): unbiased, far less noisy than
+    // independent draws, and continued — not restarted — when a point is
+    // shaded again with a later first_round. The variance is estimated as for
+    // independent draws, so it is an upper bound. ng, the geometric normal,
+    // places the ray origins.
+    void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
 
     LightingCounters counters;
