@@ -228,7 +228,15 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                 PointLighting& shader = shaders.local();
                 tile_points(tile, [&](std::size_t i) {
                     PointState& s = state[i];
-                    if (!covered(i) || s.done || cancel.load(std::memory_order_relaxed)) return;
+                    if (!covered(i) || s.done || cancel.load(std::memory_order_relaxed) ||
+                        out_of_time.load(std::memory_order_relaxed))
+                        return;
+                    // Checked per point: a late pass's tile can take longer than the
+                    // slack a time budget allows.
+                    if (settings.time_budget > 0 && elapsed() >= settings.time_budget) {
+                        out_of_time = true;
+                        return;
+                    }
                     double value[3], variance[3];
                     const BakePoint p = settings.target == BakeTarget::Lightmap
                                             ? lightmap_point(mesh, coverage, i,
