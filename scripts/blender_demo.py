@@ -28,6 +28,9 @@ import omis_bake
 from omis_bake.job import BakeJob
 from omis_bake.settings import settings_from
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from demo_bake import noise_comparison  # noqa: E402  (one plot for both demos)
+
 
 def script_args():
     """The script's own arguments: after Blender's `--` (blender_run.sh adds it;
@@ -201,26 +204,6 @@ def save_image(image, path_base, scene):
         vs.exposure = 0.0
         vs.gamma = 1.0
         image.save_render(path_base + suffix + ".png", scene=scene)
-
-
-def noise_comparison(path, maps, labels, stats):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    vmax = max(np.percentile(n[m > 0.5], 99) for n, m in maps)
-    fig, axes = plt.subplots(1, len(maps), figsize=(6.5 * len(maps), 5.0))
-    for ax, (noise, mask), label, s in zip(axes, maps, labels, stats):
-        shown = np.where(mask > 0.5, noise, np.nan)
-        im = ax.imshow(shown, origin="lower", cmap="magma", vmin=0, vmax=vmax)
-        ax.set_title(f"{label}\n{s['samples_per_texel']:.0f} samples/texel, "
-                     f"mean rel. error {100 * s['mean_relative_error']:.2f} %")
-        ax.set_xticks([])
-        ax.set_yticks([])
-    fig.colorbar(im, ax=list(axes), shrink=0.8, label="estimated relative standard error")
-    tmp = path + ".tmp.png"
-    fig.savefig(tmp, dpi=90)
-    os.replace(tmp, path)
 
 
 def main():

@@ -39,17 +39,19 @@ def progress_bar(label):
     return show
 
 
-def noise_comparison(path, results, labels):
-    """Side-by-side maps of the estimated relative error, one shared scale."""
+def noise_comparison(path, maps, labels, stats):
+    """Side-by-side maps of the estimated relative error, one shared scale.
+    maps: (noise, mask) per bake; stats: the bakes' stats dicts. Shared with
+    scripts/blender_demo.py."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    vmax = max(np.percentile(r.noise[r.mask > 0], 99) for r in results)
-    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 4.6))
-    for ax, r, label in zip(axes, results, labels):
-        im = ax.imshow(r.noise, origin="lower", cmap="magma", vmin=0, vmax=vmax)
-        s = r.stats
+    vmax = max(np.percentile(n[m > 0.5], 99) for n, m in maps)
+    fig, axes = plt.subplots(1, len(maps), figsize=(6.5 * len(maps), 5.0))
+    for ax, (noise, mask), label, s in zip(axes, maps, labels, stats):
+        im = ax.imshow(np.where(mask > 0.5, noise, np.nan), origin="lower", cmap="magma",
+                       vmin=0, vmax=vmax)
         ax.set_title(f"{label}\n{s['samples_per_texel']:.0f} samples/texel, "
                      f"mean rel. error {100 * s['mean_relative_error']:.2f} %")
         ax.set_xticks([])
@@ -83,8 +85,9 @@ def main():
         r.write_png(os.path.join(args.out, f"{name}.png"), view="Standard")
         r.write_png(os.path.join(args.out, f"{name}_filmic.png"), view="Filmic")
         results.append(r)
-    noise_comparison(os.path.join(args.out, "noise_comparison.png"), results,
-                     [s for s, _ in runs])
+    noise_comparison(os.path.join(args.out, "noise_comparison.png"),
+                     [(r.noise, r.mask) for r in results], [s for s, _ in runs],
+                     [r.stats for r in results])
 
     lines = ["", f"{'strategy':<16} {'time (s)':>9} {'samples/texel':>14} "
                  f"{'mean rel. error':>16} {'max rel. error':>15}"]
