@@ -12,11 +12,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
-#include <limits>
 #include <memory>
 #include <set>
 #include <stdexcept>
@@ -103,8 +101,11 @@ public:
         }
         tmp_ = templ.data();
         if (::fchmod(fd_, mode) != 0) {
+            const int e = errno;
+            ::close(fd_);  // no destructor runs for a throwing constructor
+            ::unlink(tmp_.c_str());
             fail(writer, path, "cannot set permissions of the temporary file: " +
-                                   std::string(std::strerror(errno)));
+                                   std::string(std::strerror(e)));
         }
     }
 
