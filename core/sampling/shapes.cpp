@@ -197,6 +197,33 @@ double EllipseLight::pdf_area(const Vec3& x, const Vec3& w) const {
     return area_pdf(intersect(x, w), w, normalize(cross(axis_a, axis_b)), area());
 }
 
+std::optional<LightSample> EllipseLight::sample_solid_angle(const Vec3& x, double u1,
+                                                            double u2) const {
+    const auto se = SphericalEllipse::make(x, center, axis_a, axis_b);
+    if (!se) return std::nullopt;
+    const DirSample s = se->sample(u1, u2);
+    return LightSample{s.dir, s.dist, se->pdf(s.dir)};
+}
+
+double EllipseLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
+    const auto se = SphericalEllipse::make(x, center, axis_a, axis_b);
+    return se ? se->pdf(w) : 0.0;
+}
+
+std::optional<LightSample> EllipseLight::sample_clipped(const Vec3& x, const ClippedDisk& part,
+                                                        double u1, double u2) const {
+    const Point2 p = part.sample(u1, u2);
+    const double clipped_area = area() * part.area() / kPi;
+    return area_sample_record((center - x) + axis_a * p.x + axis_b * p.y,
+                              normalize(cross(axis_a, axis_b)), clipped_area);
+}
+
+double EllipseLight::pdf_clipped(const Vec3& x, const ClippedDisk& part, const Vec3& w) const {
+    const auto h = intersect(x, w);
+    if (!h || !part.contains(h->uv)) return 0;
+    return area_pdf(h, w, normalize(cross(axis_a, axis_b)), area() * part.area() / kPi);
+}
+
 std::optional<ParallelEllipse> EllipseLight::parallel(const Vec3& x, const Vec3& n) const {
     return ParallelEllipse::make(x, n, center - x, axis_a, axis_b);
 }

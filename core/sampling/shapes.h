@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "math/vec3.h"
+#include "sampling/ellipse.h"
 #include "sampling/parallel.h"
 #include "sampling/spherical.h"
 #include "sampling/warp.h"
@@ -78,6 +79,14 @@ struct EllipseLight {
 
     std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
     double pdf_area(const Vec3& x, const Vec3& w) const;
+    // The elliptic cone seen from x (SphericalEllipse): exact, within 2× of uniform.
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    // Uniform over the part of the ellipse whose (α, β) lie in `part` (area measure;
+    // pdf d²/(A·part.area()/π·|cos θ_l|) in solid angle), 0 elsewhere.
+    std::optional<LightSample> sample_clipped(const Vec3& x, const ClippedDisk& part,
+                                              double u1, double u2) const;
+    double pdf_clipped(const Vec3& x, const ClippedDisk& part, const Vec3& w) const;
     std::optional<ParallelEllipse> parallel(const Vec3& x, const Vec3& n) const;
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
                                                double u2) const;
