@@ -112,6 +112,24 @@ double RectLight::pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) cons
     return pp ? pp->pdf(w) : 0.0;
 }
 
+std::optional<ProjectedPolygon> RectLight::projected(const Vec3& x, const Vec3& n) const {
+    return ProjectedPolygon::make(n, corner - x, {Vec3{}, edge_u, edge_u + edge_v, edge_v}, 4);
+}
+
+std::optional<LightSample> RectLight::sample_projected(const Vec3& x, const Vec3& n, double u1,
+                                                       double u2) const {
+    const auto pp = projected(x, n);
+    if (!pp) return std::nullopt;
+    const DirSample s = pp->sample(u1, u2);
+    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+}
+
+double RectLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    if (!intersect(x, w)) return 0;
+    const auto pp = projected(x, n);
+    return pp ? pp->pdf_hit(w) : 0.0;
+}
+
 // ----------------------------------------------------------------- triangle
 
 double TriangleLight::area() const { return 0.5 * length(cross(p1 - p0, p2 - p0)); }
@@ -167,6 +185,24 @@ double TriangleLight::pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) 
     if (!intersect(x, w)) return 0;
     const auto pp = parallel(x, n);
     return pp ? pp->pdf(w) : 0.0;
+}
+
+std::optional<ProjectedPolygon> TriangleLight::projected(const Vec3& x, const Vec3& n) const {
+    return ProjectedPolygon::make(n, p0 - x, {Vec3{}, p1 - p0, p2 - p0, Vec3{}}, 3);
+}
+
+std::optional<LightSample> TriangleLight::sample_projected(const Vec3& x, const Vec3& n,
+                                                           double u1, double u2) const {
+    const auto pp = projected(x, n);
+    if (!pp) return std::nullopt;
+    const DirSample s = pp->sample(u1, u2);
+    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+}
+
+double TriangleLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    if (!intersect(x, w)) return 0;
+    const auto pp = projected(x, n);
+    return pp ? pp->pdf_hit(w) : 0.0;
 }
 
 // ------------------------------------------------------------------ ellipse
