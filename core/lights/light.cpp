@@ -158,6 +158,7 @@ const char* light_sampler_name(LightSampler sampler) {
         case LightSampler::Area: return "area";
         case LightSampler::SolidAngle: return "solid-angle";
         case LightSampler::Parallel: return "parallel";
+        case LightSampler::ProjectedSolidAngle: return "projected-solid-angle";
     }
     return "unknown";
 }
@@ -411,6 +412,13 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
 
 bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n) {
     if (!light_reaches(l, x, n)) return false;
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        // Polygons need an area above the horizon; other shapes fall back to solid angle.
+        if (l.type == LightType::Triangle) return l.triangle.projected(x, n).has_value();
+        if (l.type != LightType::Rect) return true;
+        const auto r = rect_reaching(l, x);
+        return r && r->projected(x, n).has_value();
+    }
     if (sampler != LightSampler::Parallel) return true;
     switch (l.type) {
         case LightType::Rect: {
@@ -427,6 +435,14 @@ bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const 
 
 std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, const Vec3& x,
                                         const Vec3& n, double u1, double u2) {
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        if (l.type == LightType::Triangle) return l.triangle.sample_projected(x, n, u1, u2);
+        if (l.type == LightType::Rect) {
+            const auto r = rect_reaching(l, x);
+            return r ? r->sample_projected(x, n, u1, u2) : std::nullopt;
+        }
+        sampler = LightSampler::SolidAngle;
+    }
     switch (l.type) {
         case LightType::Rect: {
             const auto r = rect_reaching(l, x);
@@ -474,6 +490,14 @@ std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, co
 
 double light_pdf(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w) {
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        if (l.type == LightType::Triangle) return l.triangle.pdf_projected(x, n, w);
+        if (l.type == LightType::Rect) {
+            const auto r = rect_reaching(l, x);
+            return r ? r->pdf_projected(x, n, w) : 0.0;
+        }
+        sampler = LightSampler::SolidAngle;
+    }
     switch (l.type) {
         case LightType::Rect: {
             const auto r = rect_reaching(l, x);

@@ -17,7 +17,9 @@ enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World };
 const char* light_type_name(LightType type);
 
 // How a light technique draws a point/direction on a chosen light (SPEC §3).
-enum class LightSampler { Area, SolidAngle, Parallel };
+// ProjectedSolidAngle draws ∝ cos θ on rects and triangles; other shapes use their
+// solid-angle sampler under that name.
+enum class LightSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
 const char* light_sampler_name(LightSampler sampler);
 
 struct Light {
