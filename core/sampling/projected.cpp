@@ -36,7 +36,9 @@ double newton_bracketed(F&& f, D&& df, double target, double lo, double hi, doub
         const double d = df(t);
         double next = d > 0 ? t - r / d : 0.5 * (lo + hi);
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        const bool done = std::abs(next - t) <= 1e-14 * width || hi - lo <= 1e-14 * width;
+        // 1e-11 of the bracket: far below any visible bias, and above the rounding
+        // noise of Lambert's sum, which would keep Newton stepping.
+        const bool done = std::abs(next - t) <= 1e-11 * width || hi - lo <= 1e-11 * width;
         t = next;
         if (done) break;
     }
