@@ -86,7 +86,59 @@ Vec3 planar_radiance(const Light& l, const Vec3& w) {
     return l.emission * spread_factor(cos_l, l.spread);
 }
 
+// Blender's spread (SPEC §4) lets an emitting point reach x only when x lies
+// within s/2 of the light's normal seen from that point: those points form the
+// disk of radius |z|·tan(s/2) about x's foot on the light's plane. Cycles 3.4
+// samples only the part of a rectangle inside that disk's bounding square
+// (area_light_spread_clamp_area_light in kernel/light/area.h); rects and ellipses
+// do so here. The box is in the light's own coordinates along e1 and e2.
+struct SpreadBox {
+    double a0, a1, b0, b1;
+};
+
+SpreadBox spread_box(double spread, const Vec3& x, const Vec3& origin, const Vec3& e1,
+                     const Vec3& e2) {
+    const Vec3 d = x - origin;
+    const double l1 = dot(e1, e1), l2 = dot(e2, e2);
+    const double z = std::abs(dot(d, normalize(cross(e1, e2))));
+    const double radius = z * std::tan(0.5 * spread);
+    const double fa = dot(d, e1) / l1, fb = dot(d, e2) / l2;
+    const double ra = radius / std::sqrt(l1), rb = radius / std::sqrt(l2);
+    return {fa - ra, fa + ra, fb - rb, fb + rb};
+}
+
+// An ellipse light as its samplers see it from x: whole, or only a clipped part
+// (α, β) of it, or nothing when the spread lets no point reach x.
+struct EllipseReach {
+    bool whole = true;
+    std::optional<ClippedDisk> part;
+    bool none() const { return !whole && !part; }
+};
+
+EllipseReach ellipse_reach(const Light& l, const Vec3& x) {
+    EllipseReach r;
+    if (l.spread >= kPi) return r;
+    const EllipseLight& e = l.ellipse;
+    const SpreadBox b = spread_box(l.spread, x, e.center, e.axis_a, e.axis_b);
+    if (b.a0 <= -1 && b.a1 >= 1 && b.b0 <= -1 && b.b1 >= 1) return r;
+    r.whole = false;
+    r.part = ClippedDisk::make(std::max(b.a0, -1.0), std::min(b.a1, 1.0), std::max(b.b0, -1.0),
+                               std::min(b.b1, 1.0));
+    return r;
+}
+
 }  // namespace
+
+std::optional<RectLight> rect_reaching(const Light& l, const Vec3& x) {
+    const RectLight& r = l.rect;
+    if (l.spread >= kPi) return r;
+    const SpreadBox b = spread_box(l.spread, x, r.corner, r.edge_u, r.edge_v);
+    const double s0 = std::max(b.a0, 0.0), s1 = std::min(b.a1, 1.0);
+    const double v0 = std::max(b.b0, 0.0), v1 = std::min(b.b1, 1.0);
+    if (!(s0 < s1 && v0 < v1)) return std::nullopt;
+    return RectLight{r.corner + r.edge_u * s0 + r.edge_v * v0, r.edge_u * (s1 - s0),
+                     r.edge_v * (v1 - v0)};
+}
 
 const char* light_type_name(LightType type) {
     switch (type) {
@@ -106,6 +158,7 @@ const char* light_sampler_name(LightSampler sampler) {
         case LightSampler::Area: return "area";
         case LightSampler::SolidAngle: return "solid-angle";
         case LightSampler::Parallel: return "parallel";
+        case LightSampler::ProjectedSolidAngle: return "projected-solid-angle";
     }
     return "unknown";
 }
@@ -317,16 +370,22 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
     };
     switch (l.type) {
         case LightType::Rect: {
-            const RectLight& r = l.rect;
-            return in_front(r.corner) &&
-                   above({r.corner, r.corner + r.edge_u, r.corner + r.edge_v,
-                          r.corner + r.edge_u + r.edge_v});
+            const auto r = rect_reaching(l, x);  // with spread: the part that reaches x
+            return r && in_front(r->corner) &&
+                   above({r->corner, r->corner + r->edge_u, r->corner + r->edge_v,
+                          r->corner + r->edge_u + r->edge_v});
         }
         case LightType::Ellipse: {
             const EllipseLight& e = l.ellipse;
-            return in_front(e.center) &&
-                   above({e.center + e.axis_a + e.axis_b, e.center + e.axis_a - e.axis_b,
-                          e.center - e.axis_a + e.axis_b, e.center - e.axis_a - e.axis_b});
+            const EllipseReach reach = ellipse_reach(l, x);
+            if (reach.none() || !in_front(e.center)) return false;
+            double a0 = -1, a1 = 1, b0 = -1, b1 = 1;  // a box around what reaches x
+            if (reach.part) {
+                const Point2 lo = reach.part->box_min(), hi = reach.part->box_max();
+                a0 = lo.x, a1 = hi.x, b0 = lo.y, b1 = hi.y;
+            }
+            auto at = [&](double a, double b) { return e.center + e.axis_a * a + e.axis_b * b; };
+            return above({at(a0, b0), at(a0, b1), at(a1, b0), at(a1, b1)});
         }
         case LightType::Triangle: {
             const TriangleLight& t = l.triangle;
@@ -353,9 +412,19 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
 
 bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n) {
     if (!light_reaches(l, x, n)) return false;
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        // Polygons need an area above the horizon; other shapes fall back to solid angle.
+        if (l.type == LightType::Triangle) return l.triangle.projected(x, n).has_value();
+        if (l.type != LightType::Rect) return true;
+        const auto r = rect_reaching(l, x);
+        return r && r->projected(x, n).has_value();
+    }
     if (sampler != LightSampler::Parallel) return true;
     switch (l.type) {
-        case LightType::Rect: return l.rect.parallel(x, n).has_value();
+        case LightType::Rect: {
+            const auto r = rect_reaching(l, x);
+            return r && r->parallel(x, n).has_value();
+        }
         case LightType::Ellipse: return l.ellipse.parallel(x, n).has_value();
         case LightType::Triangle: return l.triangle.parallel(x, n).has_value();
         case LightType::Point:
@@ -366,19 +435,37 @@ bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const 
 
 std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, const Vec3& x,
                                         const Vec3& n, double u1, double u2) {
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        if (l.type == LightType::Triangle) return l.triangle.sample_projected(x, n, u1, u2);
+        if (l.type == LightType::Rect) {
+            const auto r = rect_reaching(l, x);
+            return r ? r->sample_projected(x, n, u1, u2) : std::nullopt;
+        }
+        sampler = LightSampler::SolidAngle;
+    }
     switch (l.type) {
-        case LightType::Rect:
-            if (sampler == LightSampler::Area) return l.rect.sample_area(x, u1, u2);
-            if (sampler == LightSampler::SolidAngle) return l.rect.sample_solid_angle(x, u1, u2);
-            return l.rect.sample_parallel(x, n, u1, u2);
+        case LightType::Rect: {
+            const auto r = rect_reaching(l, x);
+            if (!r) return std::nullopt;
+            if (sampler == LightSampler::Area) return r->sample_area(x, u1, u2);
+            if (sampler == LightSampler::SolidAngle) return r->sample_solid_angle(x, u1, u2);
+            return r->sample_parallel(x, n, u1, u2);
+        }
         case LightType::Triangle:
             if (sampler == LightSampler::Area) return l.triangle.sample_area(x, u1, u2);
             if (sampler == LightSampler::SolidAngle)
                 return l.triangle.sample_solid_angle(x, u1, u2);
             return l.triangle.sample_parallel(x, n, u1, u2);
-        case LightType::Ellipse:  // no closed-form solid-angle sampler: area
+        case LightType::Ellipse: {
+            // Parallel projects the whole ellipse; area and solid angle draw only
+            // the part a spread lets reach x when that is not all of it.
             if (sampler == LightSampler::Parallel) return l.ellipse.sample_parallel(x, n, u1, u2);
-            return l.ellipse.sample_area(x, u1, u2);
+            const EllipseReach reach = ellipse_reach(l, x);
+            if (reach.part) return l.ellipse.sample_clipped(x, *reach.part, u1, u2);
+            if (!reach.whole) return std::nullopt;
+            if (sampler == LightSampler::Area) return l.ellipse.sample_area(x, u1, u2);
+            return l.ellipse.sample_solid_angle(x, u1, u2);
+        }
         case LightType::Point:
         case LightType::Spot: {
             if (!has_radius(l)) return std::nullopt;
@@ -403,18 +490,34 @@ std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, co
 
 double light_pdf(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w) {
+    if (sampler == LightSampler::ProjectedSolidAngle) {
+        if (l.type == LightType::Triangle) return l.triangle.pdf_projected(x, n, w);
+        if (l.type == LightType::Rect) {
+            const auto r = rect_reaching(l, x);
+            return r ? r->pdf_projected(x, n, w) : 0.0;
+        }
+        sampler = LightSampler::SolidAngle;
+    }
     switch (l.type) {
-        case LightType::Rect:
-            if (sampler == LightSampler::Area) return l.rect.pdf_area(x, w);
-            if (sampler == LightSampler::SolidAngle) return l.rect.pdf_solid_angle(x, w);
-            return l.rect.pdf_parallel(x, n, w);
+        case LightType::Rect: {
+            const auto r = rect_reaching(l, x);
+            if (!r) return 0;
+            if (sampler == LightSampler::Area) return r->pdf_area(x, w);
+            if (sampler == LightSampler::SolidAngle) return r->pdf_solid_angle(x, w);
+            return r->pdf_parallel(x, n, w);
+        }
         case LightType::Triangle:
             if (sampler == LightSampler::Area) return l.triangle.pdf_area(x, w);
             if (sampler == LightSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, w);
             return l.triangle.pdf_parallel(x, n, w);
-        case LightType::Ellipse:
+        case LightType::Ellipse: {
             if (sampler == LightSampler::Parallel) return l.ellipse.pdf_parallel(x, n, w);
-            return l.ellipse.pdf_area(x, w);
+            const EllipseReach reach = ellipse_reach(l, x);
+            if (reach.part) return l.ellipse.pdf_clipped(x, *reach.part, w);
+            if (!reach.whole) return 0;
+            if (sampler == LightSampler::Area) return l.ellipse.pdf_area(x, w);
+            return l.ellipse.pdf_solid_angle(x, w);
+        }
         case LightType::Point:
         case LightType::Spot: {
             if (!has_radius(l)) return 0;
@@ -435,7 +538,9 @@ double unoccluded_irradiance(const Light& l, const Vec3& x, const Vec3& n) {
     const double lum = luminance(l.emission);
     switch (l.type) {
         case LightType::Rect: {
-            const RectLight& r = l.rect;
+            // With spread, over the part that reaches x (the spread factor's shape
+            // is left out of this selection weight).
+            const RectLight r = *rect_reaching(l, x);
             return lum * polygon_irradiance(x, n, {r.corner, r.corner + r.edge_u,
                                                    r.corner + r.edge_u + r.edge_v,
                                                    r.corner + r.edge_v});

@@ -17,7 +17,9 @@ enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World };
 const char* light_type_name(LightType type);
 
 // How a light technique draws a point/direction on a chosen light (SPEC §3).
-enum class LightSampler { Area, SolidAngle, Parallel };
+// ProjectedSolidAngle draws ∝ cos θ on rects and triangles; other shapes use their
+// solid-angle sampler under that name.
+enum class LightSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
 const char* light_sampler_name(LightSampler sampler);
 
 struct Light {
@@ -97,10 +99,14 @@ bool light_reaches(const Light& light, const Vec3& x, const Vec3& n);
 
 // Whether `sampler` can draw directions toward this light at (x, n): the
 // parallel projection needs the light wholly above the horizon and a planar
-// or disk shape. Lights without a sampler of their own fall back (see
-// sample_light): ellipses sample by area for `solid-angle`; sun and world use
-// their cone and the cosine hemisphere for every sampler.
+// or disk shape. Sun and world have no shape of their own: they use their
+// cone and the cosine hemisphere for every sampler (see sample_light).
 bool sampler_applies(const Light& light, LightSampler sampler, const Vec3& x, const Vec3& n);
+
+// The rectangle a rect light's samplers draw from at x: the whole light, or with
+// spread < π the part of it inside the bounding square of the spread's reach
+// (Cycles 3.4); empty when no point of the light can reach x.
+std::optional<RectLight> rect_reaching(const Light& light, const Vec3& x);
 
 // A direction toward the light drawn by `sampler`, with its solid-angle pdf
 // (sr⁻¹), and the matching pdf evaluation (0 where w misses the light).

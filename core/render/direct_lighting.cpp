@@ -88,8 +88,10 @@ const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std
     SolidAngleCache& c = solid_angle_cache_[l];
     if (c.point != point_serial_) {
         c.point = point_serial_;
-        if (light.type == LightType::Rect)
-            c.rect = SphericalRect::make(x, light.rect.corner, light.rect.edge_u, light.rect.edge_v);
+        if (light.type == LightType::Rect) {
+            const auto r = rect_reaching(light, x);  // spread: only the part that reaches x
+            c.rect = r ? SphericalRect::make(x, r->corner, r->edge_u, r->edge_v) : std::nullopt;
+        }
         else
             c.triangle = SphericalTriangle::make(x, light.triangle.p0, light.triangle.p1,
                                                  light.triangle.p2);

@@ -1,5 +1,6 @@
 #include "render/effect_plan.h"
 
+#include <algorithm>
 #include <sstream>
 
 namespace omis {
@@ -13,6 +14,21 @@ bool has_planar_projection(const Light& l) {
         case LightType::Point:
         case LightType::Spot: return l.radius > 0;
         default: return false;
+    }
+}
+
+// Widest extent of a planar light (rect diagonal, ellipse major diameter,
+// longest triangle edge); 0 for other lights.
+double planar_extent(const Light& l) {
+    switch (l.type) {
+        case LightType::Rect: return length(l.rect.edge_u + l.rect.edge_v);
+        case LightType::Ellipse:
+            return 2 * std::max(length(l.ellipse.axis_a), length(l.ellipse.axis_b));
+        case LightType::Triangle: {
+            const TriangleLight& t = l.triangle;
+            return std::max({length(t.p1 - t.p0), length(t.p2 - t.p1), length(t.p0 - t.p2)});
+        }
+        default: return 0;
     }
 }
 
@@ -87,12 +103,18 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     techniques.clear();
     samples.clear();
     int integrated = 0;
-    bool world = false, emissive_meshes = false;
+    bool world = false, emissive_meshes = false, huge = false;
     for (const Light& l : scene.lights()) {
         if (l.is_delta()) continue;
         ++integrated;
         world = world || l.type == LightType::World;
         emissive_meshes = emissive_meshes || l.type == LightType::Triangle;
+        // A light as wide as the scene covers much of the hemisphere of points
+        // near it and crosses their horizon; uniform solid angle then spends its
+        // draws where cos θ is small. Measured on disks 5 cm and 1 m under
+        // lights 1 m and 60 m wide (16 rounds, optimal weights): adding `bsdf`
+        // cut the per-point standard deviation 3× and 11×.
+        huge = huge || planar_extent(l) >= scene.bounding_radius();
     }
     auto add = [&](const char* name, int count) {
         techniques.push_back(*parse_technique(name));
@@ -112,8 +134,8 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         add("unoccluded/solid-angle", 1);
         add("power/solid-angle", 1);
     }
-    // The world and large emissive meshes are what cosine sampling is good at.
-    if (world || emissive_meshes) add("bsdf", 1);
+    // The world, emissive meshes and huge lights are what cosine sampling is good at.
+    if (world || emissive_meshes || huge) add("bsdf", 1);
 }
 
 }  // namespace omis

@@ -23,6 +23,7 @@ std::optional<Technique> parse_technique(std::string_view name) {
     if (smp == "area") t.sampler = LightSampler::Area;
     else if (smp == "solid-angle") t.sampler = LightSampler::SolidAngle;
     else if (smp == "parallel") t.sampler = LightSampler::Parallel;
+    else if (smp == "projected-solid-angle") t.sampler = LightSampler::ProjectedSolidAngle;
     else return std::nullopt;
     return t;
 }

@@ -22,7 +22,8 @@ struct Technique {
     }
 };
 
-// "bsdf", "uniform/area", "power/solid-angle", "unoccluded/parallel", ...
+// "bsdf", "uniform/area", "power/solid-angle", "unoccluded/parallel",
+// "uniform/projected-solid-angle", ...
 std::optional<Technique> parse_technique(std::string_view name);
 
 }  // namespace omis

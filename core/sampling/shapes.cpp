@@ -112,6 +112,24 @@ double RectLight::pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) cons
     return pp ? pp->pdf(w) : 0.0;
 }
 
+std::optional<ProjectedPolygon> RectLight::projected(const Vec3& x, const Vec3& n) const {
+    return ProjectedPolygon::make(n, corner - x, {Vec3{}, edge_u, edge_u + edge_v, edge_v}, 4);
+}
+
+std::optional<LightSample> RectLight::sample_projected(const Vec3& x, const Vec3& n, double u1,
+                                                       double u2) const {
+    const auto pp = projected(x, n);
+    if (!pp) return std::nullopt;
+    const DirSample s = pp->sample(u1, u2);
+    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+}
+
+double RectLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    if (!intersect(x, w)) return 0;
+    const auto pp = projected(x, n);
+    return pp ? pp->pdf_hit(w) : 0.0;
+}
+
 // ----------------------------------------------------------------- triangle
 
 double TriangleLight::area() const { return 0.5 * length(cross(p1 - p0, p2 - p0)); }
@@ -169,6 +187,24 @@ double TriangleLight::pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) 
     return pp ? pp->pdf(w) : 0.0;
 }
 
+std::optional<ProjectedPolygon> TriangleLight::projected(const Vec3& x, const Vec3& n) const {
+    return ProjectedPolygon::make(n, p0 - x, {Vec3{}, p1 - p0, p2 - p0, Vec3{}}, 3);
+}
+
+std::optional<LightSample> TriangleLight::sample_projected(const Vec3& x, const Vec3& n,
+                                                           double u1, double u2) const {
+    const auto pp = projected(x, n);
+    if (!pp) return std::nullopt;
+    const DirSample s = pp->sample(u1, u2);
+    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+}
+
+double TriangleLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    if (!intersect(x, w)) return 0;
+    const auto pp = projected(x, n);
+    return pp ? pp->pdf_hit(w) : 0.0;
+}
+
 // ------------------------------------------------------------------ ellipse
 
 double EllipseLight::area() const { return kPi * length(axis_a) * length(axis_b); }
@@ -195,6 +231,33 @@ std::optional<LightSample> EllipseLight::sample_area(const Vec3& x, double u1, d
 
 double EllipseLight::pdf_area(const Vec3& x, const Vec3& w) const {
     return area_pdf(intersect(x, w), w, normalize(cross(axis_a, axis_b)), area());
+}
+
+std::optional<LightSample> EllipseLight::sample_solid_angle(const Vec3& x, double u1,
+                                                            double u2) const {
+    const auto se = SphericalEllipse::make(x, center, axis_a, axis_b);
+    if (!se) return std::nullopt;
+    const DirSample s = se->sample(u1, u2);
+    return LightSample{s.dir, s.dist, se->pdf(s.dir)};
+}
+
+double EllipseLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
+    const auto se = SphericalEllipse::make(x, center, axis_a, axis_b);
+    return se ? se->pdf(w) : 0.0;
+}
+
+std::optional<LightSample> EllipseLight::sample_clipped(const Vec3& x, const ClippedDisk& part,
+                                                        double u1, double u2) const {
+    const Point2 p = part.sample(u1, u2);
+    const double clipped_area = area() * part.area() / kPi;
+    return area_sample_record((center - x) + axis_a * p.x + axis_b * p.y,
+                              normalize(cross(axis_a, axis_b)), clipped_area);
+}
+
+double EllipseLight::pdf_clipped(const Vec3& x, const ClippedDisk& part, const Vec3& w) const {
+    const auto h = intersect(x, w);
+    if (!h || !part.contains(h->uv)) return 0;
+    return area_pdf(h, w, normalize(cross(axis_a, axis_b)), area() * part.area() / kPi);
 }
 
 std::optional<ParallelEllipse> EllipseLight::parallel(const Vec3& x, const Vec3& n) const {

@@ -7,7 +7,9 @@
 #include <optional>
 
 #include "math/vec3.h"
+#include "sampling/ellipse.h"
 #include "sampling/parallel.h"
+#include "sampling/projected.h"
 #include "sampling/spherical.h"
 #include "sampling/warp.h"
 
@@ -47,6 +49,11 @@ struct RectLight {
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
                                                double u2) const;
     double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+    // ∝ cos θ over the part above the horizon (ProjectedPolygon); pdf cos θ/Ωp.
+    std::optional<ProjectedPolygon> projected(const Vec3& x, const Vec3& n) const;
+    std::optional<LightSample> sample_projected(const Vec3& x, const Vec3& n, double u1,
+                                                double u2) const;
+    double pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const;
 };
 
 // Triangle p0 p1 p2; emits toward cross(p1 − p0, p2 − p0) if one-sided.
@@ -66,6 +73,10 @@ struct TriangleLight {
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
                                                double u2) const;
     double pdf_parallel(const Vec3& x, const Vec3& n, const Vec3& w) const;
+    std::optional<ProjectedPolygon> projected(const Vec3& x, const Vec3& n) const;
+    std::optional<LightSample> sample_projected(const Vec3& x, const Vec3& n, double u1,
+                                                double u2) const;
+    double pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const;
 };
 
 // Disk or ellipse center + α·axis_a + β·axis_b, α² + β² ≤ 1, semi-axes perpendicular
@@ -78,6 +89,14 @@ struct EllipseLight {
 
     std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
     double pdf_area(const Vec3& x, const Vec3& w) const;
+    // The elliptic cone seen from x (SphericalEllipse): exact, within 2× of uniform.
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    // Uniform over the part of the ellipse whose (α, β) lie in `part` (area measure;
+    // pdf d²/(A·part.area()/π·|cos θ_l|) in solid angle), 0 elsewhere.
+    std::optional<LightSample> sample_clipped(const Vec3& x, const ClippedDisk& part,
+                                              double u1, double u2) const;
+    double pdf_clipped(const Vec3& x, const ClippedDisk& part, const Vec3& w) const;
     std::optional<ParallelEllipse> parallel(const Vec3& x, const Vec3& n) const;
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
                                                double u2) const;
