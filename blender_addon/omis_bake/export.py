@@ -83,6 +83,7 @@ class _LocalMesh:
     tri_loop: np.ndarray           # (T, 3) int32
     loop_normal: np.ndarray        # (L, 3) float64
     material_index: np.ndarray     # (T,) int32
+    flat: np.ndarray = None        # (T,) bool: the triangle's polygon is flat-shaded
     uv: np.ndarray = None          # (L, 2) float32, active UV map, bake objects only
     loop_vertex: np.ndarray = None # (L,) int32, bake objects only
     n_loops: int = 0
@@ -102,9 +103,16 @@ def _read_mesh(me, want_uv):
     me.loop_triangles.foreach_get("material_index", mat)
     ln = np.empty(nl * 3, np.float32)
     me.loops.foreach_get("normal", ln)
+    smooth = np.empty(len(me.polygons), bool)
+    me.polygons.foreach_get("use_smooth", smooth)
+    # With Auto Smooth (split or custom normals) Cycles shades every face with
+    # the loop normals; otherwise flat faces use each triangle's own normal.
+    smooth |= bool(getattr(me, "use_auto_smooth", False))
+    tri_poly = np.empty(nt, np.int32)
+    me.loop_triangles.foreach_get("polygon_index", tri_poly)
     local = _LocalMesh(co.reshape(-1, 3).astype(np.float64), tri_vert.reshape(-1, 3),
                        tri_loop.reshape(-1, 3), ln.reshape(-1, 3).astype(np.float64), mat,
-                       n_loops=nl)
+                       flat=~smooth[tri_poly], n_loops=nl)
     if want_uv:
         layer = me.uv_layers.active
         if layer is not None:
@@ -377,6 +385,24 @@ def _modifier_differences(ob):
 # The exporter
 
 
+def _corner_normals(positions, tris, loop_normals, flat):
+    """Per-corner shading normals (3T, 3) float32. Cycles shades a flat-shaded
+    polygon with each triangle's own geometric normal (its Ng), not the
+    polygon's normal that Blender's loop normals carry: on a non-planar quad
+    (Suzanne has many) the two differ by tens of degrees."""
+    out = np.array(loop_normals, np.float64).reshape(-1, 3, 3)
+    if flat is not None and flat.any():
+        p = positions[tris[flat]].astype(np.float64)
+        ng = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        length = np.linalg.norm(ng, axis=1, keepdims=True)
+        ok = length[:, 0] > 0
+        ng[ok] /= length[ok]
+        tri_normals = out[flat]
+        tri_normals[ok] = ng[ok][:, None, :]
+        out[flat] = tri_normals
+    return np.ascontiguousarray(out.reshape(-1, 3), dtype=np.float32)
+
+
 class _Exporter:
     def __init__(self, context, omis, units, bake_objects, target):
         self.context = context
@@ -552,7 +578,8 @@ class _Exporter:
                 verts, tris = positions[used], inverse.reshape(-1, 3).astype(np.int32)
             else:
                 verts = positions
-            corner_normals = np.ascontiguousarray(normals[loops.ravel()], dtype=np.float32)
+            corner_normals = _corner_normals(verts, tris, normals[loops.ravel()],
+                                             local.flat[select])
             uvs = None
             baked = bake_name is not None and (image is not None or attr is not None)
             if baked and image is not None:

@@ -193,6 +193,24 @@ def scene_touching_walls():
     return [floor]
 
 
+def scene_suzanne_vertices():
+    """Vertex colours on Suzanne (flat-shaded, many non-planar quads, concave
+    corners) standing on a floor, under a sun and an area light. Returns
+    Suzanne (it carries a POINT colour attribute)."""
+    bpy.ops.mesh.primitive_monkey_add(size=1.0, location=(0, 0, 0.5))
+    monkey = bpy.context.active_object
+    monkey.name = "Suzanne"
+    monkey.data.materials.append(bpy.data.materials.new("SuzanneMat"))
+    monkey.data.color_attributes.new("baked", 'FLOAT_COLOR', 'POINT')
+    monkey.data.color_attributes.active_color = monkey.data.color_attributes["baked"]
+    U.grid_mesh("Floor", size=4.0, cuts=1)
+    U.add_light('SUN', "sun", energy=2.0, rotation=(U.deg(40), U.deg(-30), U.deg(-20)),
+                angle=U.deg(3))
+    U.add_light('AREA', "square", energy=120.0, location=(0.3, -1.3, 1.8),
+                rotation=(U.deg(30), 0, 0), shape='SQUARE', size=0.6)
+    return [monkey]
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
