@@ -425,6 +425,23 @@ public:
         raise_if_pending();
     }
 
+    // "lambert", "principled" (Principled BSDF's diffuse) or "oren-nayar"
+    // (Diffuse BSDF): the closure a mesh has when baked (render/receiver.h).
+    void set_receiver(long long mesh, const std::string& model, double roughness) {
+        if (mesh < 0 || mesh >= (long long)OMIS_INVALID_ID)
+            bad("mesh", "no mesh with id " + std::to_string(mesh));
+        OMISReceiver receiver = OMIS_RECEIVER_LAMBERT;
+        if (model == "lambert") receiver = OMIS_RECEIVER_LAMBERT;
+        else if (model == "principled") receiver = OMIS_RECEIVER_PRINCIPLED_DIFFUSE;
+        else if (model == "oren-nayar") receiver = OMIS_RECEIVER_OREN_NAYAR;
+        else
+            bad("model", "unknown receiver '" + model +
+                             "' (lambert, principled or oren-nayar)");
+        omisGetError(nullptr);  // void call: start from a clean error state
+        omisSetMeshReceiver(get(), (unsigned int)mesh, receiver, roughness);
+        raise_if_pending();
+    }
+
     void commit() {
         omisGetError(nullptr);
         {
@@ -943,6 +960,11 @@ normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
         .def("set_light_flags", &Scene::set_light_flags, py::arg("light"),
              py::arg("cast_shadow") = true, py::arg("visible_to_bsdf") = true,
              "Blender's cycles.cast_shadow and use_multiple_importance_sampling for one light.")
+        .def("set_receiver", &Scene::set_receiver, py::arg("mesh"), py::arg("model"),
+             py::arg("roughness") = 0.0,
+             "The mesh's diffuse closure when baked, as Cycles' Diffuse bake evaluates it: "
+             "'lambert' (default), 'principled' (Principled BSDF, its Roughness) or "
+             "'oren-nayar' (Diffuse BSDF, its Roughness). Before commit.")
         .def("commit", &Scene::commit,
              "Builds the acceleration structure; the scene is then read-only.")
         .def("effect_plan", &effect_plan, py::arg("techniques") = py::none(),
@@ -1010,5 +1032,7 @@ threads (0 = all cores); results do not depend on it.)doc");
           py::arg("seed") = 0, py::arg("smooth_normals") = true, py::arg("progress") = py::none(),
           py::arg("threads") = 0,
           R"doc(Bakes E_direct/π at a mesh's vertices (domain "POINT") or triangle corners
-("CORNER", 3 per triangle in triangle order), as bake_uv does for texels.)doc");
+("CORNER", 3 per triangle in triangle order), as bake_uv does for texels. As in
+Cycles, each corner is shaded just inside its triangle and a vertex takes the
+mean of its corners.)doc");
 }

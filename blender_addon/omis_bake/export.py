@@ -9,6 +9,10 @@ Where this differs from Cycles' own bake, and why:
   the viewport one. Objects hidden in the viewport but enabled for rendering,
   and modifiers whose viewport settings differ from their render settings, are
   reported as warnings rather than silently baked differently.
+- The baked surface's closure follows its material (``material_receiver``):
+  Principled BSDF → the Principled diffuse at its Roughness, Diffuse BSDF →
+  Oren–Nayar, evaluated as Cycles' Diffuse bake does; other surfaces are baked
+  as Lambert with a warning.
 - The material's *active* Image Texture node is read from ``nodes.active``
   (Cycles' "active texture" flag has no Python accessor); a tree whose active
   node is not an image node but holds exactly one Image Texture node uses that.
@@ -79,6 +83,7 @@ class _LocalMesh:
     tri_loop: np.ndarray           # (T, 3) int32
     loop_normal: np.ndarray        # (L, 3) float64
     material_index: np.ndarray     # (T,) int32
+    flat: np.ndarray = None        # (T,) bool: the triangle's polygon is flat-shaded
     uv: np.ndarray = None          # (L, 2) float32, active UV map, bake objects only
     loop_vertex: np.ndarray = None # (L,) int32, bake objects only
     n_loops: int = 0
@@ -98,9 +103,16 @@ def _read_mesh(me, want_uv):
     me.loop_triangles.foreach_get("material_index", mat)
     ln = np.empty(nl * 3, np.float32)
     me.loops.foreach_get("normal", ln)
+    smooth = np.empty(len(me.polygons), bool)
+    me.polygons.foreach_get("use_smooth", smooth)
+    # With Auto Smooth (split or custom normals) Cycles shades every face with
+    # the loop normals; otherwise flat faces use each triangle's own normal.
+    smooth |= bool(getattr(me, "use_auto_smooth", False))
+    tri_poly = np.empty(nt, np.int32)
+    me.loop_triangles.foreach_get("polygon_index", tri_poly)
     local = _LocalMesh(co.reshape(-1, 3).astype(np.float64), tri_vert.reshape(-1, 3),
                        tri_loop.reshape(-1, 3), ln.reshape(-1, 3).astype(np.float64), mat,
-                       n_loops=nl)
+                       flat=~smooth[tri_poly], n_loops=nl)
     if want_uv:
         layer = me.uv_layers.active
         if layer is not None:
@@ -234,6 +246,58 @@ def material_emission(material, units, problems):
     return radiance if max(radiance) > 0 else None
 
 
+def _follow_reroutes(node):
+    while node is not None and node.type == 'REROUTE':
+        node, _ = _linked_from(node.inputs[0])
+    return node
+
+
+def _unlinked_value(node, name, material, problems):
+    socket = node.inputs[name]
+    if socket.is_linked:
+        problems.append(f'material "{material.name}": {node.name} ▸ {name} is linked; omis '
+                        f'uses its unlinked value {_socket_value(socket):.3g}')
+    return _socket_value(socket)
+
+
+def material_receiver(material, problems):
+    """(model, roughness) of the diffuse closure Cycles' Diffuse bake evaluates on
+    this material (omis Scene.set_receiver), or None for Lambert.
+
+    Principled BSDF → its diffuse ("principled", Roughness); Diffuse BSDF →
+    Oren–Nayar at its Roughness (Lambert at 0). No material or no nodes is
+    Cycles' default diffuse (Lambert). Anything else is baked as Lambert with a
+    warning in `problems`."""
+    if material is None or not material.use_nodes or material.node_tree is None:
+        return None
+    out = _active_output(material.node_tree, {'ShaderNodeOutputMaterial'})
+    node = _follow_reroutes(_linked_from(out.inputs['Surface'])[0]) if out else None
+    if node is None or node.mute:
+        problems.append(f'material "{material.name}" has no surface shader; omis bakes it as '
+                        f'Lambert (Cycles\' Diffuse bake gives 0 there)')
+        return None
+    if node.type == 'BSDF_DIFFUSE':
+        roughness = _unlinked_value(node, "Roughness", material, problems)
+        return ("oren-nayar", max(0.0, roughness)) if roughness > 0 else None
+    if node.type == 'BSDF_PRINCIPLED':
+        roughness = _unlinked_value(node, "Roughness", material, problems)
+        for name in ("Subsurface", "Sheen"):
+            if node.inputs[name].is_linked or _socket_value(node.inputs[name]) > 0:
+                problems.append(f'material "{material.name}": {name} is not modelled by omis '
+                                f'(only the Principled diffuse is)')
+        metallic = _socket_value(node.inputs["Metallic"])
+        transmission = _socket_value(node.inputs["Transmission"])
+        if not node.inputs["Metallic"].is_linked and not node.inputs["Transmission"].is_linked \
+                and (metallic >= 1.0 or transmission >= 1.0):
+            problems.append(f'material "{material.name}" has no diffuse part (Metallic or '
+                            f'Transmission 1): Cycles\' Diffuse bake gives 0, omis bakes its '
+                            f'Principled diffuse')
+        return ("principled", max(0.0, roughness))
+    problems.append(f'material "{material.name}": its surface ({node.name}) is neither a '
+                    f'Principled nor a Diffuse BSDF; omis bakes it as Lambert')
+    return None
+
+
 def active_image(material):
     """(image, problem): the material's active Image Texture node's image."""
     if material is None:
@@ -321,6 +385,24 @@ def _modifier_differences(ob):
 # The exporter
 
 
+def _corner_normals(positions, tris, loop_normals, flat):
+    """Per-corner shading normals (3T, 3) float32. Cycles shades a flat-shaded
+    polygon with each triangle's own geometric normal (its Ng), not the
+    polygon's normal that Blender's loop normals carry: on a non-planar quad
+    (Suzanne has many) the two differ by tens of degrees."""
+    out = np.array(loop_normals, np.float64).reshape(-1, 3, 3)
+    if flat is not None and flat.any():
+        p = positions[tris[flat]].astype(np.float64)
+        ng = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        length = np.linalg.norm(ng, axis=1, keepdims=True)
+        ok = length[:, 0] > 0
+        ng[ok] /= length[ok]
+        tri_normals = out[flat]
+        tri_normals[ok] = ng[ok][:, None, :]
+        out[flat] = tri_normals
+    return np.ascontiguousarray(out.reshape(-1, 3), dtype=np.float32)
+
+
 class _Exporter:
     def __init__(self, context, omis, units, bake_objects, target):
         self.context = context
@@ -331,11 +413,13 @@ class _Exporter:
         self.warnings = []
         self.lights = []
         self.counts = {"instances": 0, "meshes": 0, "triangles": 0, "vertices": 0,
-                       "emissive_meshes": 0, "lights": {}, "world": False}
+                       "emissive_meshes": 0, "lights": {}, "world": False,
+                       "receivers": {}}
         self.bake_objects = bake_objects
         self.bake_names = {ob.name_full for ob in bake_objects}
         self.images = {}          # image name_full -> ImageTarget
         self._emission_cache = {}
+        self._receiver_cache = {}
         self._mesh_cache = {}
         self._bake_local = {}     # object name -> _LocalMesh
         self._bake_slot_images = {}  # object name -> [ImageTarget or None] per slot
@@ -431,6 +515,19 @@ class _Exporter:
             out.append(self._emission_cache[key])
         return out
 
+    def _slot_receivers(self, materials):
+        out = []
+        for material in materials:
+            key = material.original.name_full if material is not None else None
+            if key not in self._receiver_cache:
+                problems = []
+                self._receiver_cache[key] = material_receiver(
+                    material.original if material is not None else None, problems)
+                for p in problems:
+                    self.warn(p)
+            out.append(self._receiver_cache[key])
+        return out
+
     def add_geometry(self, ob_eval, matrix, local, bake_name=None):
         M = np.array(matrix, dtype=np.float64)
         A = M[:3, :3]
@@ -449,8 +546,10 @@ class _Exporter:
         materials = [slot.material for slot in ob_eval.material_slots]
         emissions = self._slot_emission(materials)
         slot_images = self._bake_slot_images.get(bake_name) if bake_name else None
+        # The receiver closure matters only where omis shades: on baked objects.
+        receivers = self._slot_receivers(materials) if bake_name else []
 
-        # Group triangles by (emission, target image): each group is one omis mesh.
+        # Group triangles by (emission, target image, receiver): each group is one omis mesh.
         n_slots = len(materials)
         slot_of_tri = (np.clip(local.material_index, 0, n_slots - 1) if n_slots
                        else np.zeros(len(tri_vert), np.int32))
@@ -458,16 +557,17 @@ class _Exporter:
         for s in range(max(n_slots, 1)):
             emission = emissions[s] if n_slots else None
             image = slot_images[s] if (slot_images and n_slots) else None
-            key = (emission, id(image))
+            receiver = receivers[s] if (receivers and n_slots) else None
+            key = (emission, id(image), receiver)
             if key not in index:
                 index[key] = len(groups)
-                groups.append((emission, image))
+                groups.append((emission, image, receiver))
             slot_group.append(index[key])
         group_of_tri = np.asarray(slot_group, np.int32)[slot_of_tri]
 
         attr = self._attr_target.get(bake_name) if bake_name else None
         self.counts["instances"] += 1
-        for g, (emission, image) in enumerate(groups):
+        for g, (emission, image, receiver) in enumerate(groups):
             select = group_of_tri == g
             count = int(select.sum())
             if count == 0:
@@ -478,13 +578,18 @@ class _Exporter:
                 verts, tris = positions[used], inverse.reshape(-1, 3).astype(np.int32)
             else:
                 verts = positions
-            corner_normals = np.ascontiguousarray(normals[loops.ravel()], dtype=np.float32)
+            corner_normals = _corner_normals(verts, tris, normals[loops.ravel()],
+                                             local.flat[select])
             uvs = None
             baked = bake_name is not None and (image is not None or attr is not None)
             if baked and image is not None:
                 uvs = np.ascontiguousarray(local.uv[loops.ravel()], dtype=np.float32)
             mesh_id = self.scene.add_mesh(np.ascontiguousarray(verts), tris, corner_normals,
                                           uvs, emission)
+            if receiver is not None:
+                self.scene.set_receiver(mesh_id, receiver[0], roughness=receiver[1])
+                self.counts["receivers"][receiver[0]] = \
+                    self.counts["receivers"].get(receiver[0], 0) + 1
             self.counts["meshes"] += 1
             self.counts["triangles"] += count
             self.counts["vertices"] += len(verts)

@@ -90,17 +90,20 @@ def prepare_image(target, parts, margin, clear):
 def corner_to_loops(parts, n_loops):
     """Per-loop RGB from CORNER bakes: parts is a list of (value (3T, 3), tri_loops (T, 3)).
     A loop shared by several loop triangles (polygons with more than 3 corners)
-    takes the mean of its corners. Returns (rgb (L, 3), has (L,) bool)."""
-    total = np.zeros((n_loops, 3), np.float64)
-    count = np.zeros(n_loops, np.int64)
+    takes its first triangle's corner, as Cycles does ("first triangle wins",
+    object_bake_api bake_targets_populate_pixels_color_attributes): each corner
+    is shaded just inside its own triangle, so the choice matters where another
+    object meets the polygon. Returns (rgb (L, 3), has (L,) bool)."""
+    rgb = np.zeros((n_loops, 3), np.float32)
+    has = np.zeros(n_loops, bool)
     for value, tri_loops in parts:
         loops = np.asarray(tri_loops, np.int64).ravel()
-        for c in range(3):
-            total[:, c] += np.bincount(loops, weights=value[:, c], minlength=n_loops)
-        count += np.bincount(loops, minlength=n_loops)
-    has = count > 0
-    total[has] /= count[has, None]
-    return total.astype(np.float32), has
+        # np.unique's index is each loop's first occurrence in triangle order.
+        unique, first = np.unique(loops, return_index=True)
+        fresh = ~has[unique]
+        rgb[unique[fresh]] = np.asarray(value, np.float32)[first[fresh]]
+        has[unique[fresh]] = True
+    return rgb, has
 
 
 def prepare_attribute(target, parts):

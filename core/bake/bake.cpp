@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "bake/uv_raster.h"
+#include "bake/vertex_points.h"
 
 namespace omis {
 namespace {
@@ -38,37 +39,18 @@ BakePoint lightmap_point(const Mesh& mesh, const UvCoverage& cov, std::size_t i,
     return {mesh.position(t, cov.b1[i], cov.b2[i]), n, ng};
 }
 
-// Vertices take the area-weighted mean of their faces' normals (shading and
-// geometric); corners take their own.
-std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth) {
+// One point per triangle corner, inside its triangle as Cycles places it
+// (vertex bakes are reduced from corners: see vertex_points.h).
+std::vector<BakePoint> corner_points(const Mesh& mesh, bool smooth) {
     std::vector<BakePoint> points;
-    if (corners) {
-        for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t)
-            for (int k = 0; k < 3; ++k) {
-                const Vec3 ng = mesh.geometric_normal(t);
-                const double b1 = k == 1, b2 = k == 2;
-                Vec3 n = smooth ? mesh.shading_normal(t, b1, b2) : ng;
-                if (!(length(n) > 0)) n = ng;
-                points.push_back({mesh.positions[mesh.triangles[t][k]], n, ng});
-            }
-        return points;
-    }
-    std::vector<Vec3> sum_n(mesh.positions.size()), sum_ng(mesh.positions.size());
-    for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t) {
-        const double area = mesh.triangle_area(t);
-        const Vec3 ng = mesh.geometric_normal(t);
+    for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t)
         for (int k = 0; k < 3; ++k) {
-            const double b1 = k == 1, b2 = k == 2;
-            const Vec3 n = smooth ? mesh.shading_normal(t, b1, b2) : ng;
-            sum_n[mesh.triangles[t][k]] += n * area;
-            sum_ng[mesh.triangles[t][k]] += ng * area;
+            const Vec3 ng = mesh.geometric_normal(t);
+            const CornerPoint c = inset_corner(mesh, t, k);
+            Vec3 n = smooth ? mesh.shading_normal(t, c.b1, c.b2) : ng;
+            if (!(length(n) > 0)) n = ng;
+            points.push_back({mesh.position(t, c.b1, c.b2), n, ng});
         }
-    }
-    for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
-        const double ln = length(sum_n[v]), lg = length(sum_ng[v]);
-        const Vec3 ng = lg > 0 ? sum_ng[v] / lg : Vec3(0, 0, 1);
-        points.push_back({mesh.positions[v], ln > 0 ? sum_n[v] / ln : ng, ng});
-    }
     return points;
 }
 
@@ -115,6 +97,13 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         all.threads = 0;
         return arena.execute([&] { return bake(scene, all, progress); });
     }
+    if (in.target == BakeTarget::Vertices && scene.committed() &&
+        in.mesh < scene.geometry().num_meshes()) {
+        // A vertex is the mean of its corners, as in Cycles (vertex_points.h).
+        BakeSettings corners = in;
+        corners.target = BakeTarget::Corners;
+        return corners_to_vertices(scene.geometry().mesh(in.mesh), bake(scene, corners, progress));
+    }
     const auto start = Clock::now();
     if (!scene.committed())
         throw std::logic_error("scene: not committed (call commit before baking)");
@@ -142,8 +131,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         result.width = settings.width;
         result.height = settings.height;
     } else {
-        points = vertex_points(mesh, settings.target == BakeTarget::Corners,
-                               settings.smooth_normals);
+        points = corner_points(mesh, settings.smooth_normals);
         result.width = int(points.size());
         result.height = 1;
     }
@@ -171,6 +159,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         done += size;
     }
     const int max_passes = int(pass_rounds.size());
+    settings.lighting.receiver = scene.mesh_receiver(in.mesh);  // render/receiver.h
     const LightingContext context(scene, settings.lighting);
 
     std::vector<PointState> state(count);

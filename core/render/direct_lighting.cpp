@@ -211,8 +211,10 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         if (!visible(h)) continue;
         (p_.scene.lights()[h.light].visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
     }
-    f.main *= cos_theta * kInvPi;
-    f.hidden *= cos_theta * kInvPi;
+    // The receiver's closure (Lambert: cosθ/π), as Cycles' Diffuse bake sees it.
+    const double closure = receiver_cosine_factor(p_.settings.receiver, cos_theta);
+    f.main *= closure;
+    f.hidden *= closure;
     return f;
 }
 
@@ -260,7 +262,8 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                                   d->distance))
                 continue;
         }
-        total += d->irradiance * kInvPi;
+        total += d->irradiance * (kInvPi * p_.settings.receiver.lambert_ratio(
+                                               dot(n, d->direction)));
     }
 
     // Which enabled techniques apply here: a light technique needs a light its

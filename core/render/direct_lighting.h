@@ -12,6 +12,7 @@
 
 #include "mis/strategy.h"
 #include "render/effect_plan.h"
+#include "render/receiver.h"
 #include "render/scene.h"
 
 namespace omis {
@@ -23,6 +24,9 @@ struct DirectLightingSettings {
     Strategy strategy = Strategy::OptimalDirect;
     StrategyOptions options;
     std::uint64_t seed = 0;
+    // The receiving surface's diffuse closure at every point (render/receiver.h);
+    // bake() takes it from the scene's mesh.
+    Receiver receiver;
 };
 
 struct DirectLightingStats {

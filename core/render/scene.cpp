@@ -43,6 +43,20 @@ void Scene::set_light_flags(std::uint32_t light, bool cast_shadow, bool visible_
     lights_[light].visible_to_bsdf = visible_to_bsdf;
 }
 
+void Scene::set_mesh_receiver(std::uint32_t mesh, const Receiver& receiver) {
+    if (committed_) throw std::logic_error("scene: already committed; set receivers before commit");
+    if (mesh >= geometry_.num_meshes())
+        throw std::invalid_argument("mesh: id " + std::to_string(mesh) + " is out of range (" +
+                                    std::to_string(geometry_.num_meshes()) + " meshes)");
+    if (receivers_.size() <= mesh) receivers_.resize(mesh + 1);
+    receivers_[mesh] = make_receiver(receiver.model, receiver.roughness);  // validates
+}
+
+const Receiver& Scene::mesh_receiver(std::uint32_t mesh) const {
+    static const Receiver lambert;
+    return mesh < receivers_.size() ? receivers_[mesh] : lambert;
+}
+
 void Scene::commit() {
     if (committed_) return;
     geometry_.commit();

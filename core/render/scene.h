@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "lights/light.h"
+#include "render/receiver.h"
 #include "scene/geometry_scene.h"
 
 namespace omis {
@@ -26,6 +27,10 @@ public:
     // Returns the light id (index into lights()). A second world replaces the first.
     std::uint32_t add_light(const Light& light);
     void set_light_flags(std::uint32_t light, bool cast_shadow, bool visible_to_bsdf);
+    // The diffuse closure a mesh's surface has when it is baked (Lambert unless
+    // set); before commit.
+    void set_mesh_receiver(std::uint32_t mesh, const Receiver& receiver);
+    const Receiver& mesh_receiver(std::uint32_t mesh) const;
 
     // Builds the acceleration structure and the emissive-triangle lights.
     void commit();
@@ -43,6 +48,7 @@ private:
 
     GeometryScene geometry_;
     std::vector<Light> lights_;
+    std::vector<Receiver> receivers_;  // per mesh; shorter: Lambert for the rest
     std::size_t analytic_lights_ = 0;
     double bounding_radius_ = 1;
     bool committed_ = false;

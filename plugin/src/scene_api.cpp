@@ -244,6 +244,26 @@ OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool c
     });
 }
 
+OMIS_API void omisSetMeshReceiver(OMISScene scene, unsigned int mesh, OMISReceiver receiver,
+                                  double roughness) {
+    guarded_void([&] {
+        auto* s = checked(scene, "scene");
+        omis::ReceiverModel model;
+        switch (receiver) {
+            case OMIS_RECEIVER_LAMBERT: model = omis::ReceiverModel::Lambert; break;
+            case OMIS_RECEIVER_PRINCIPLED_DIFFUSE:
+                model = omis::ReceiverModel::PrincipledDiffuse;
+                break;
+            case OMIS_RECEIVER_OREN_NAYAR: model = omis::ReceiverModel::OrenNayar; break;
+            default:
+                throw std::invalid_argument("receiver: unknown value " +
+                                            std::to_string(int(receiver)));
+        }
+        auto lock = s->lock_for_build("omisSetMeshReceiver");
+        s->scene.set_mesh_receiver(mesh, omis::make_receiver(model, roughness));
+    });
+}
+
 OMIS_API void omisCommitScene(OMISScene scene) {
     guarded_void([&] {
         auto* s = checked(scene, "scene");

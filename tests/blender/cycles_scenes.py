@@ -118,6 +118,99 @@ def scene_emission_world(size=SIZE):
     return objs
 
 
+def _principled_receiver(image, roughness, name="Receiver"):
+    """A grid whose material is the default Principled BSDF at `roughness`."""
+    ob = receiver(image, name, size=2.0, cuts=2)
+    bsdf = ob.data.materials[0].node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Roughness"].default_value = roughness
+    return ob
+
+
+def scene_principled_r0(size=SIZE):
+    # Grazing suns (issue 12): Principled diffuse is not Lambert there.
+    img = U.make_image("bake", size)
+    objs = [_principled_receiver(img, 0.0)]
+    U.add_light('SUN', "sun79", energy=3.0, rotation=(U.deg(79), 0, U.deg(20)),
+                angle=U.deg(4))
+    return objs
+
+
+def scene_principled_r05(size=SIZE):
+    img = U.make_image("bake", size)
+    objs = [_principled_receiver(img, 0.5)]
+    U.add_light('SUN', "sun60", energy=2.0, rotation=(U.deg(60), 0, U.deg(-30)),
+                angle=U.deg(6))
+    U.add_light('SUN', "sun85_delta", energy=4.0, rotation=(U.deg(85), 0, U.deg(120)),
+                angle=0.0)
+    return objs
+
+
+def scene_principled_r1(size=SIZE):
+    img = U.make_image("bake", size)
+    objs = [_principled_receiver(img, 1.0)]
+    U.add_light('SUN', "sun79", energy=3.0, rotation=(U.deg(79), 0, U.deg(200)),
+                angle=U.deg(4))
+    U.add_light('AREA', "low_area", energy=150.0, location=(1.6, 0.0, 0.25),
+                rotation=(0, U.deg(-80), 0), shape='SQUARE', size=0.5)
+    return objs
+
+
+def scene_oren_nayar(size=SIZE):
+    # Diffuse BSDF with roughness: Cycles' Oren–Nayar, viewed along the normal.
+    img = U.make_image("bake", size)
+    ob = receiver(img, size=2.0, cuts=2)
+    tree = ob.data.materials[0].node_tree
+    tree.nodes.remove(tree.nodes["Principled BSDF"])
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Roughness"].default_value = 0.8
+    tree.links.new(diffuse.outputs[0], tree.nodes["Material Output"].inputs["Surface"])
+    U.add_light('SUN', "sun70", energy=3.0, rotation=(U.deg(70), 0, U.deg(45)),
+                angle=U.deg(5))
+    return [ob]
+
+
+def scene_touching_walls():
+    """Vertex colours where objects meet (issue 12): a 6 × 6-quad floor (49
+    vertices), two walls standing on two of its edges and a box resting on it
+    whose sides pass through a row of its vertices; a sun from the open side and
+    a square area light. Returns the floor (it carries a POINT colour attribute)."""
+    floor = U.grid_mesh("Floor", size=2.0, cuts=5)
+    floor.data.materials.append(bpy.data.materials.new("FloorMat"))
+    floor.data.color_attributes.new("baked", 'FLOAT_COLOR', 'POINT')
+    floor.data.color_attributes.active_color = floor.data.color_attributes["baked"]
+    for name, location, rotation in (("WallW", (-1.0, 0.0, 0.5), (0, U.deg(90), 0)),
+                                     ("WallN", (0.0, 1.0, 0.5), (U.deg(90), 0, 0))):
+        bpy.ops.mesh.primitive_plane_add(size=1.0, location=location, rotation=rotation)
+        wall = bpy.context.active_object
+        wall.name = name
+        wall.scale = (1.0, 2.0, 1.0) if name == "WallW" else (2.0, 1.0, 1.0)
+    # Box: x ∈ [0, 1/3], y ∈ [−1/3, 1/3], z ∈ [0, 0.4]: its sides meet floor vertices.
+    U.add_box("Box", (1.0 / 3.0, 2.0 / 3.0, 0.4), (1.0 / 6.0, 0.0, 0.2))
+    U.add_light('SUN', "sun", energy=2.0, rotation=(U.deg(40), U.deg(-30), U.deg(-20)),
+                angle=U.deg(3))
+    U.add_light('AREA', "square", energy=120.0, location=(0.3, -0.3, 1.2),
+                rotation=(U.deg(10), 0, 0), shape='SQUARE', size=0.6)
+    return [floor]
+
+
+def scene_suzanne_vertices():
+    """Vertex colours on Suzanne (flat-shaded, many non-planar quads, concave
+    corners) standing on a floor, under a sun and an area light. Returns
+    Suzanne (it carries a POINT colour attribute)."""
+    bpy.ops.mesh.primitive_monkey_add(size=1.0, location=(0, 0, 0.5))
+    monkey = bpy.context.active_object
+    monkey.name = "Suzanne"
+    monkey.data.materials.append(bpy.data.materials.new("SuzanneMat"))
+    monkey.data.color_attributes.new("baked", 'FLOAT_COLOR', 'POINT')
+    monkey.data.color_attributes.active_color = monkey.data.color_attributes["baked"]
+    U.grid_mesh("Floor", size=4.0, cuts=1)
+    U.add_light('SUN', "sun", energy=2.0, rotation=(U.deg(40), U.deg(-30), U.deg(-20)),
+                angle=U.deg(3))
+    U.add_light('AREA', "square", energy=120.0, location=(0.3, -1.3, 1.8),
+                rotation=(U.deg(30), 0, 0), shape='SQUARE', size=0.6)
+    return [monkey]
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
@@ -126,6 +219,10 @@ SCENES = {
     "sun_occluder": scene_sun_occluder,
     "shared_image": scene_shared_image,
     "emission_world": scene_emission_world,
+    "principled_r0": scene_principled_r0,
+    "principled_r05": scene_principled_r05,
+    "principled_r1": scene_principled_r1,
+    "oren_nayar": scene_oren_nayar,
 }
 
 

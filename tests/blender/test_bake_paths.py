@@ -260,7 +260,10 @@ def test_color_attributes_and_operator_arguments():
             lv = np.empty(len(me.loops), np.int32)
             me.loops.foreach_get("vertex_index", lv)
             want = want_vertex[lv]
-        check(np.allclose(got[:, 0], want, rtol=1e-4), f"{domain}: {got[:4, 0]} vs {want[:4]}")
+        # Corners are shaded 1e-4 m inside their face, as Cycles places them
+        # (core/bake/vertex_points.h): E/d² at d ≈ 0.8 m moves by up to ~4e-4
+        # relative there; the write-back itself is exact.
+        check(np.allclose(got[:, 0], want, rtol=1e-3), f"{domain}: {got[:4, 0]} vs {want[:4]}")
         check(np.all(got[:, 3] == 1.0), "alpha")
 
     # Topology-changing modifiers cannot map back to the attribute.

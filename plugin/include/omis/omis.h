@@ -191,6 +191,20 @@ OMIS_API unsigned int omisSceneSetWorld(OMISScene scene, const double radiance[3
 OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
                                      bool visibleToBsdf);
 
+/* The diffuse closure of a mesh's surface when it is baked, evaluated as
+ * Cycles 3.4's Diffuse bake does (viewed along the normal, divided by the
+ * closure's colour; SPEC §3). Default: Lambert. */
+typedef enum OMISReceiver {
+    OMIS_RECEIVER_LAMBERT = 0,             /* cosθ/π; roughness ignored */
+    OMIS_RECEIVER_PRINCIPLED_DIFFUSE = 1,  /* Principled BSDF's diffuse, its Roughness (≥ 0) */
+    OMIS_RECEIVER_OREN_NAYAR = 2           /* Diffuse BSDF, its Roughness (σ, clamped to [0, 1]) */
+} OMISReceiver;
+
+/* Sets mesh's receiver closure; before commit only. roughness must be finite
+ * and ≥ 0 (OMIS_ERROR_INVALID_ARGUMENT otherwise, as for an unknown mesh id). */
+OMIS_API void omisSetMeshReceiver(OMISScene scene, unsigned int mesh, OMISReceiver receiver,
+                                  double roughness);
+
 /* Builds the acceleration structure and the emissive-mesh lights. A second
  * commit does nothing. */
 OMIS_API void omisCommitScene(OMISScene scene);
