@@ -17,6 +17,9 @@ import numpy as np
 from . import export, native, writeback
 from .errors import BakeError, Cancelled
 
+# Blender's Bake ▸ Margin ▸ Type -> omis.bake_uv's margin_type.
+MARGIN_TYPES = {'EXTEND': "extend", 'ADJACENT_FACES': "adjacent-faces"}
+
 
 class _Unit:
     """One native bake call: one omis mesh into one image, or onto its corners."""
@@ -121,6 +124,7 @@ class BakeJob:
                           seed=int(s.seed), smooth_normals=True,
                           noise_target=float(s.noise_target) if s.use_noise_target else None,
                           progress=self._progress)
+            margin_type = MARGIN_TYPES[s.margin_type]
             names = s.technique_names()
             if names is not None:
                 common["techniques"] = names
@@ -137,7 +141,8 @@ class BakeJob:
                 if unit.kind == 'uv':
                     result = omis.bake_uv(self.export.scene, unit.part.mesh_id,
                                           unit.target.width, unit.target.height,
-                                          margin=int(s.margin), time_budget=budget, **common)
+                                          margin=int(s.margin), margin_type=margin_type,
+                                          time_budget=budget, **common)
                 else:
                     result = omis.bake_vertices(self.export.scene, unit.part.mesh_id,
                                                 domain="CORNER", time_budget=budget, **common)

@@ -142,11 +142,11 @@ def _output_props():
             description="Extend the baked result as a post process filter (pixels; default: "
                         "Render Properties ▸ Bake ▸ Margin ▸ Size)"),
         "margin_type": EnumProperty(
-            name="Margin Type", default='EXTEND',
+            name="Margin Type", default='ADJACENT_FACES',
             description="Which values fill the margin (default: Render Properties ▸ Bake ▸ "
-                        "Margin ▸ Type); omis does Extend and refuses Adjacent Faces",
+                        "Margin ▸ Type)",
             items=(('ADJACENT_FACES', "Adjacent Faces", "Use pixels from adjacent faces "
-                                                         "across UV seams (not supported)"),
+                                                         "across UV seams"),
                    ('EXTEND', "Extend", "Extend border pixels outwards"))),
         "use_clear": BoolProperty(
             name="Clear Image", default=True,
@@ -208,7 +208,7 @@ class Settings:
     # From scene.render.bake (or an operator / bake() argument):
     target: str = 'IMAGE_TEXTURES'
     margin: int = 16
-    margin_type: str = 'EXTEND'
+    margin_type: str = 'ADJACENT_FACES'
     use_clear: bool = True
     use_selected_to_active: bool = False
 
@@ -259,11 +259,6 @@ class Settings:
             return ("Selected to Active is not supported by omis: untick Render Properties ▸ "
                     "Bake ▸ Selected to Active (scene.render.bake.use_selected_to_active = "
                     "False, or use_selected_to_active=False), or use Cycles' own Bake for it")
-        if (self.target == 'IMAGE_TEXTURES' and int(self.margin) > 0
-                and self.margin_type == 'ADJACENT_FACES'):
-            return ("Margin Type 'Adjacent Faces' is not supported by omis: set Render "
-                    "Properties ▸ Bake ▸ Margin ▸ Type to Extend (scene.render.bake."
-                    "margin_type = 'EXTEND', or margin_type='EXTEND'), or Size to 0")
         return None
 
 

@@ -53,8 +53,6 @@ def _draw_refusal(layout, context):
     bake = context.scene.render.bake
     if bake.use_selected_to_active:
         box.prop(bake, "use_selected_to_active")
-    else:
-        box.prop(bake, "margin_type", text="Margin Type")
 
 
 def _draw_running(layout, job):

@@ -31,8 +31,8 @@ def reset_scene(engine='CYCLES'):
     scene = bpy.context.scene
     scene.world = None
     scene.render.engine = engine
-    # omis refuses Blender 3.4's default margin type (Adjacent Faces); tests of the
-    # refusal set it themselves.
+    # The margin these tests check is Extend; Adjacent Faces (Blender 3.4's
+    # default) has tests of its own (test_adjacent_margin.py).
     scene.render.bake.margin_type = 'EXTEND'
     scene.render.bake.use_selected_to_active = False
     c = scene.cycles

@@ -108,14 +108,14 @@ def test_every_engine():
     check([e for e in log if e[0] == "operator"] == [("operator", "omis.bake")],
           "one Bake button")
 
-    # Blender's default margin type, refused: the panel says so before a bake, in
-    # words naming the setting, with the setting at hand.
-    bpy.context.scene.render.bake.margin_type = 'ADJACENT_FACES'
+    # Selected to Active, refused: the panel says so before a bake, in words naming
+    # the setting, with the setting at hand.
+    bpy.context.scene.render.bake.use_selected_to_active = True
     log = draw("OMIS_PT_bake", 'CYCLES')
     labels = " ".join(text for kind, text in log if kind == "label")
-    check("Adjacent Faces" in labels and "Extend" in labels and ("prop", "margin_type") in log,
-          f"no refusal shown for Adjacent Faces: {labels!r}")
-    bpy.context.scene.render.bake.margin_type = 'EXTEND'
+    check("Selected to Active" in labels and ("prop", "use_selected_to_active") in log,
+          f"no refusal shown for Selected to Active: {labels!r}")
+    bpy.context.scene.render.bake.use_selected_to_active = False
 
     # A bake under EEVEE (omis needs nothing of Cycles).
     U.reset_scene(engine='BLENDER_EEVEE')

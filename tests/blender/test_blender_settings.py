@@ -3,8 +3,8 @@ agrees with the panel.
 
 - Blender's own bake settings (scene.render.bake: target, margin, margin type, clear,
   selected to active) drive the bake; operator / bake() arguments override them.
-- Margin Type 'Adjacent Faces' and Selected to Active are refused with a message that
-  names the setting and the way out; nothing is written.
+- Selected to Active is refused with a message that names the setting and the way
+  out; nothing is written. (Adjacent Faces margins: test_adjacent_margin.py.)
 - bpy.ops.omis.bake(techniques=...) implies Manual sampling, as omis_bake.bake() does;
   objects may be given by name.
 
@@ -67,21 +67,6 @@ def expect_refusal(texts, images, **arguments):
 
 
 def test_refusals():
-    objects, images = setup()
-    bake = bpy.context.scene.render.bake
-    bake.margin_type = 'ADJACENT_FACES'
-    bake.margin = 4
-    expect_refusal(["Margin Type", "Adjacent Faces", "Extend", "margin_type = 'EXTEND'"],
-                   images)
-    # A margin of 0 has no type; an argument overrides the scene's type.
-    omis_bake.bake(bpy.context, samples=1, margin=0)
-    U.set_pixels(images[0], MARK)
-    check(bpy.ops.omis.bake(samples=1, margin_type='EXTEND') == {'FINISHED'}, "override")
-    # Colour attributes have no margin: Adjacent Faces does not matter there.
-    objects[0].data.color_attributes.new("col", 'FLOAT_COLOR', 'POINT')
-    objects[0].data.color_attributes.active_color = objects[0].data.color_attributes["col"]
-    omis_bake.bake(bpy.context, samples=1, target='VERTEX_COLORS')
-
     objects, images = setup(2)
     bpy.context.scene.render.bake.use_selected_to_active = True
     expect_refusal(["Selected to Active", "use_selected_to_active = False"], images)
