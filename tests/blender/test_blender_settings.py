@@ -162,8 +162,34 @@ def test_scripting_agrees_with_panel():
         raise AssertionError("an unknown object name was not refused")
 
 
+def test_margin_type_arguments():
+    """A bad margin type is refused by name, in the add-on and in the omis module."""
+    objects, images = setup()
+    try:  # (the operator's enum argument refuses it itself, with Blender's TypeError)
+        omis_bake.bake(bpy.context, samples=1, margin_type='SMEAR')
+    except omis_bake.BakeError as exc:
+        check("margin_type" in str(exc) and "ADJACENT_FACES" in str(exc), str(exc))
+    else:
+        raise AssertionError("bake() accepted margin_type='SMEAR'")
+    check(np.all(is_mark(U.pixels(images[0]))), "a refused bake changed the image")
+    from omis_bake import native
+    omis = native.require()
+    scene = omis.Scene()
+    mesh = scene.add_mesh(np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0]], np.float64),
+                          np.array([[0, 1, 2]], np.uint32),
+                          uvs=np.array([[0, 0], [1, 0], [1, 1]], np.float64))
+    scene.commit()
+    try:
+        omis.bake_uv(scene, mesh, 8, 8, samples=1, margin_type="smear")
+    except ValueError as exc:
+        check("margin_type" in str(exc) and "adjacent-faces" in str(exc), str(exc))
+    else:
+        raise AssertionError("bake_uv accepted margin_type='smear'")
+
+
 def main():
-    for test in (test_refusals, test_scene_output_settings, test_scripting_agrees_with_panel):
+    for test in (test_refusals, test_scene_output_settings, test_scripting_agrees_with_panel,
+                 test_margin_type_arguments):
         start = time.perf_counter()
         test()
         print(f"ok {test.__name__} ({time.perf_counter() - start:.2f} s)")
