@@ -276,7 +276,8 @@ std::int64_t adjacent_source(const Mesh& mesh, const UvCoverage& c, const EdgeNe
             (landed == o || nb.triangle[o][0] == landed || nb.triangle[o][1] == landed ||
              nb.triangle[o][2] == landed))
             return std::int64_t(texel);
-        found = carry_across(mesh, c, nb, std::uint32_t(o), carried.point, carried);
+        const P2 from = carried.point;  // (carry_across overwrites `carried`)
+        found = carry_across(mesh, c, nb, std::uint32_t(o), from, carried);
     }
     return -1;
 }

@@ -1,9 +1,8 @@
 // Blender's "Adjacent Faces" margin (adjacent_margin_sources): texels beyond a UV
 // seam take the value of the face across the seam in 3D; beyond a mesh boundary
 // they extend as before.
-#include <catch2/catch.hpp>
-
 #include <array>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <vector>
 
@@ -23,9 +22,13 @@ struct SeamSquare {
     GeometryScene scene;
 
     SeamSquare() {
-        auto a = [](float x, float y) { return std::array<float, 2>{0.1f + 0.3f * x, 0.1f + 0.3f * y}; };
+        auto a = [](float x, float y) {
+            return std::array<float, 2>{0.1f + 0.3f * x, 0.1f + 0.3f * y};
+        };
         // Rotation (x, y) → (−y, x), then scale and offset.
-        auto b = [](float x, float y) { return std::array<float, 2>{0.9f - 0.3f * y, 0.55f + 0.3f * x}; };
+        auto b = [](float x, float y) {
+            return std::array<float, 2>{0.9f - 0.3f * y, 0.55f + 0.3f * x};
+        };
         for (auto uv : {a(0, 0), a(1, 0), a(1, 1), b(0, 0), b(1, 1), b(0, 1)})
             uvs.insert(uvs.end(), uv.begin(), uv.end());
         MeshInput m;
@@ -38,12 +41,14 @@ struct SeamSquare {
 
 // The 3D point that triangle t's affine UV→3D map gives at texel coordinates
 // (px, py) — also outside the triangle (its continuation across an edge).
-Vec3 continued_position(const Mesh& mesh, std::uint32_t t, double px, double py, int size) {
+Vec3 continued_position(const Mesh& mesh, std::uint32_t t, double px, double py,
+                        int size) {
     const auto& u0 = mesh.corner_uvs[3 * t];
     const auto& u1 = mesh.corner_uvs[3 * t + 1];
     const auto& u2 = mesh.corner_uvs[3 * t + 2];
     const double x = px / size, y = py / size;
-    const double d = (u1[0] - u0[0]) * (u2[1] - u0[1]) - (u2[0] - u0[0]) * (u1[1] - u0[1]);
+    const double d =
+        (u1[0] - u0[0]) * (u2[1] - u0[1]) - (u2[0] - u0[0]) * (u1[1] - u0[1]);
     const double b1 = ((x - u0[0]) * (u2[1] - u0[1]) - (u2[0] - u0[0]) * (y - u0[1])) / d;
     const double b2 = ((u1[0] - u0[0]) * (y - u0[1]) - (x - u0[0]) * (u1[1] - u0[1])) / d;
     return mesh.position(t, b1, b2);
@@ -99,7 +104,8 @@ TEST_CASE("adjacent-faces margin: a mesh without seams extends as before", "[bak
     // The same square with one UV island: every border edge is a mesh boundary.
     std::vector<float> p = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
     std::vector<std::uint32_t> t = {0, 1, 2, 0, 2, 3};
-    std::vector<float> uv = {0.3f, 0.3f, 0.7f, 0.3f, 0.7f, 0.7f, 0.3f, 0.3f, 0.7f, 0.7f, 0.3f, 0.7f};
+    std::vector<float> uv = {0.3f, 0.3f, 0.7f, 0.3f, 0.7f, 0.7f,
+                             0.3f, 0.3f, 0.7f, 0.7f, 0.3f, 0.7f};
     MeshInput m;
     m.positions = ScalarArray::of(p.data(), 4, 3);
     m.triangles = IndexArray{t.data(), 2, 3};
@@ -108,5 +114,6 @@ TEST_CASE("adjacent-faces margin: a mesh without seams extends as before", "[bak
     scene.add_mesh(m);
     const UvCoverage c = rasterize_uv(scene.mesh(0), 32, 32);
     for (int margin : {0, 1, 5})
-        CHECK(adjacent_margin_sources(c, scene.mesh(0), margin) == margin_sources(c, margin));
+        CHECK(adjacent_margin_sources(c, scene.mesh(0), margin) ==
+              margin_sources(c, margin));
 }
