@@ -99,8 +99,11 @@ def _draw_output(layout, context):
     col.prop(bake, "target")
     if bake.target == 'IMAGE_TEXTURES':
         col.prop(bake, "use_clear", text="Clear Image")
-        col.prop(bake, "margin_type", text="Margin Type")
-        col.prop(bake, "margin", text="Margin Size")
+        # As Cycles' Margin subpanel: short labels under a heading (they fit the
+        # default editor width).
+        col.label(text="Margin")
+        col.prop(bake, "margin_type", text="Type")
+        col.prop(bake, "margin", text="Size")
     col.prop(bake, "use_selected_to_active")
 
 
