@@ -773,6 +773,7 @@ struct BakeOptions {
     bool smooth_normals;
     py::object progress;
     int threads;
+    std::string margin_type = "extend";   // lightmaps: "extend" or "adjacent-faces"
 };
 
 BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
@@ -793,6 +794,9 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
         omisSetBakeInt(b, "height", height);
         if (margin < 0) bad("margin", "must not be negative");
         omisSetBakeInt(b, "margin", margin);
+        if (o.margin_type != "extend" && o.margin_type != "adjacent-faces")
+            bad("margin_type", "expected 'extend' or 'adjacent-faces', got '" + o.margin_type + "'");
+        omisSetBakeString(b, "marginType", o.margin_type.c_str());
     }
     if (o.samples < 1) bad("samples", "the sample budget must be at least 1");
     omisSetBakeInt(b, "samples", o.samples);
@@ -863,10 +867,10 @@ BakeResult bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
                    const std::string& strategy, double beta, double cutoff,
                    const py::object& time_budget, const py::object& noise_target, int margin,
                    const py::object& seed, bool smooth_normals, const py::object& progress,
-                   int threads) {
+                   int threads, const std::string& margin_type) {
     return run_bake(scene, mesh, OMIS_BAKE_LIGHTMAP, width, height, margin,
                     {techniques, counts, samples, strategy, beta, cutoff, time_budget,
-                     noise_target, seed, smooth_normals, progress, threads});
+                     noise_target, seed, smooth_normals, progress, threads, margin_type});
 }
 
 BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::string& domain,
@@ -1016,6 +1020,7 @@ return_stats=True.)doc");
           py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
           py::arg("margin") = 16, py::arg("seed") = 0, py::arg("smooth_normals") = true,
           py::arg("progress") = py::none(), py::arg("threads") = 0,
+          py::arg("margin_type") = "extend",
           R"doc(Bakes E_direct/π into a mesh's UV lightmap of width × height texels.
 
 techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
@@ -1023,7 +1028,10 @@ of each technique per round (1 each by default); samples: the sample budget per
 texel. time_budget (s) and noise_target (relative standard error) stop the bake
 earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
 raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: worker
-threads (0 = all cores); results do not depend on it.)doc");
+threads (0 = all cores); results do not depend on it. margin (texels) and
+margin_type fill the texels around UV islands as Blender's Bake ▸ Margin does:
+'extend' copies the island's nearest texel, 'adjacent-faces' the texel across
+the UV seam on the face adjacent in 3D (extend where there is none).)doc");
     m.def("bake_vertices", &bake_vertices, py::arg("scene"), py::arg("mesh"), py::kw_only(),
           py::arg("domain") = "POINT", py::arg("techniques") = py::none(),
           py::arg("counts") = py::none(), py::arg("samples") = 64,

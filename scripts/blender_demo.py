@@ -178,7 +178,8 @@ def bake(floor, label, seconds, **settings):
     # The same steps as omis_bake.bake(context, objects, **settings), keeping the
     # job so that its per-texel noise estimate can be plotted.
     s = settings_from(bpy.context.scene.omis,
-                      dict(samples=1 << 30, time_budget=seconds, seed=1, margin=16, **settings))
+                      dict(samples=1 << 30, time_budget=seconds, seed=1, margin=16,
+                           margin_type='EXTEND', **settings))
     job = BakeJob(bpy.context, [floor], s)
     job.run(progress=progress_printer(label))
     stats = job.finish(bpy.context)

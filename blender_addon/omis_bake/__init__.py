@@ -1,11 +1,13 @@
 """omis Bake — direct lighting baked with optimal multiple importance sampling.
 
-Render Properties ▸ Bake ▸ omis: the same result as Cycles' Diffuse bake with
-only Direct enabled (E_direct/π), with less noise for the time. Scripts:
+Render Properties ▸ Bake ▸ omis (under Cycles; a Bake (omis) panel of its own in
+Render Properties under EEVEE and the other engines): the same result as Cycles'
+Diffuse bake with only Direct enabled (E_direct/π), with less noise for the time.
+Scripts:
 
     import omis_bake
     stats = omis_bake.bake(bpy.context, samples=256, use_optimal_mis=True)
-    bpy.ops.omis.bake(samples=256, target='COLOR_ATTRIBUTES')
+    bpy.ops.omis.bake(samples=256, target='VERTEX_COLORS')
 """
 
 bl_info = {
@@ -13,7 +15,7 @@ bl_info = {
     "author": "omis developers",
     "version": (0, 1, 0),
     "blender": (3, 4, 0),
-    "location": "Properties ▸ Render ▸ Bake ▸ omis: Optimal MIS",
+    "location": "Properties ▸ Render ▸ Bake ▸ omis (any render engine)",
     "description": "Bake direct lighting (Cycles' Diffuse ▸ Direct) with optimal multiple "
                    "importance sampling",
     "doc_url": "",

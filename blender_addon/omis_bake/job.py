@@ -17,6 +17,9 @@ import numpy as np
 from . import export, native, writeback
 from .errors import BakeError, Cancelled
 
+# Blender's Bake ▸ Margin ▸ Type -> omis.bake_uv's margin_type.
+MARGIN_TYPES = {'EXTEND': "extend", 'ADJACENT_FACES': "adjacent-faces"}
+
 
 class _Unit:
     """One native bake call: one omis mesh into one image, or onto its corners."""
@@ -45,8 +48,10 @@ class BakeJob:
             raise BakeError(str(exc)) from None
         self.omis = omis
         self.settings = settings
-        if objects is None:
-            objects = list(context.selected_objects)
+        refused = settings.unsupported()
+        if refused is not None:
+            raise BakeError(refused)
+        objects = _resolve_objects(context, objects)
         self.object_names = [ob.name for ob in objects]
         try:
             self.export = export.export_scene(context, objects, settings.target, omis=omis,
@@ -66,6 +71,7 @@ class BakeJob:
         self._cancel = threading.Event()
         self._external_progress = None
         self.fraction = 0.0
+        self.started = None        # perf_counter() when run() began
         self.current_label = ""
         self.done = False
         self.cancelled = False
@@ -82,6 +88,17 @@ class BakeJob:
     def cancel_requested(self):
         return self._cancel.is_set()
 
+    def seconds_left(self):
+        """Estimated seconds to the end (the time limit when one is set, else the
+        elapsed time scaled by the fraction done), or None before there is a basis."""
+        if self.started is None or self.fraction <= 0.0:
+            return None
+        elapsed = time.perf_counter() - self.started
+        left = elapsed * (1.0 - self.fraction) / self.fraction
+        if self.settings.time_budget > 0:
+            left = min(left, max(0.0, self.settings.time_budget - elapsed))
+        return left
+
     def _progress(self, fraction):
         unit = self._current
         w = unit.weight if unit is not None else 0.0
@@ -97,7 +114,7 @@ class BakeJob:
     def run(self, progress=None):
         """Commits the scene and bakes every unit. Never raises: sets error/cancelled."""
         self._external_progress = progress
-        start = time.perf_counter()
+        start = self.started = time.perf_counter()
         s = self.settings
         omis = self.omis
         try:
@@ -107,6 +124,7 @@ class BakeJob:
                           seed=int(s.seed), smooth_normals=True,
                           noise_target=float(s.noise_target) if s.use_noise_target else None,
                           progress=self._progress)
+            margin_type = MARGIN_TYPES[s.margin_type]
             names = s.technique_names()
             if names is not None:
                 common["techniques"] = names
@@ -123,7 +141,8 @@ class BakeJob:
                 if unit.kind == 'uv':
                     result = omis.bake_uv(self.export.scene, unit.part.mesh_id,
                                           unit.target.width, unit.target.height,
-                                          margin=int(s.margin), time_budget=budget, **common)
+                                          margin=int(s.margin), margin_type=margin_type,
+                                          time_budget=budget, **common)
                 else:
                     result = omis.bake_vertices(self.export.scene, unit.part.mesh_id,
                                                 domain="CORNER", time_budget=budget, **common)
@@ -186,8 +205,21 @@ class BakeJob:
         store.last_seconds = stats["seconds"]
         store.last_samples_per_texel = stats["samples_per_texel"]
         store.last_mean_error = stats["mean_relative_error"]
+        store.last_error_p95 = stats["error_p95"]
+        store.last_halving_seconds = stats["halving_seconds"]
         store.last_plan = stats["plan"]
         return stats
+
+    def _errors(self):
+        """Relative errors (noise) of every baked texel or corner, all units together."""
+        parts = []
+        for u in self.units:
+            if u.noise is None:
+                continue
+            noise = u.noise.reshape(-1)
+            mask = u.mask.reshape(-1) > 0 if u.mask is not None else np.ones(noise.shape, bool)
+            parts.append(noise[mask])
+        return np.concatenate(parts) if parts else np.zeros(0, np.float32)
 
     def stats(self):
         units = [u for u in self.units if u.stats is not None]
@@ -203,10 +235,13 @@ class BakeJob:
         mean_error = (sum(u.stats["mean_relative_error"] * u.stats.get("covered", 0)
                           for u in units) / covered) if covered else 0.0
         s = self.settings
+        errors = self._errors()
+        sampling = sum(u.stats.get("seconds", 0.0) for u in units)
         return {
             "status": status,
             "seconds": self.seconds,
-            "bake_seconds": sum(u.stats.get("seconds", 0.0) for u in units),
+            "bake_seconds": sampling,
+            **accuracy_cost(errors, self.seconds, sampling),
             "samples": samples,
             "rays_traced": sum(u.stats.get("rays_traced", 0) for u in units),
             "covered": covered,
@@ -228,22 +263,63 @@ class BakeJob:
         }
 
 
+def accuracy_cost(errors, seconds, sampling_seconds):
+    """What the accuracy reached cost, and what halving it would cost.
+
+    errors: the texels' relative errors (estimated standard error / value);
+    seconds: the whole bake; sampling_seconds: the part spent in the native bakes.
+    A Monte Carlo estimate's standard error falls as 1/√n, and the samples
+    (rays) per second stay the same, so the error falls as t^(−1/2) in sampling
+    time: half the error takes 4× the samples, i.e. 3× the sampling time again
+    (the fixed cost of export and write-back is not repeated).
+    """
+    errors = np.asarray(errors, np.float64)
+    has = errors.size > 0
+    return {
+        "error_mean": float(errors.mean()) if has else 0.0,
+        # The smallest error that 95 % of the texels do not exceed (no interpolation).
+        "error_p95": float(np.percentile(errors, 95, method='higher')) if has else 0.0,
+        "halving_seconds": 3.0 * float(sampling_seconds),
+        "halving_total_seconds": float(seconds) + 3.0 * float(sampling_seconds),
+    }
+
+
+def _resolve_objects(context, objects):
+    """Objects from objects or names (default: the selected objects); names must exist."""
+    if objects is None:
+        return list(context.selected_objects)
+    if isinstance(objects, str):
+        objects = [objects]
+    out = []
+    for item in objects:
+        if isinstance(item, str):
+            ob = context.scene.objects.get(item)
+            if ob is None:
+                raise BakeError(f'objects: no object named "{item}" in the scene')
+            item = ob
+        out.append(item)
+    return out
+
+
 def bake(context, objects=None, *, progress=None, **settings):
     """Bakes `objects` (default: the selected objects) with omis; returns the stats dict.
 
+    objects: objects or their names.
     settings: any of scene.omis' settings (use_optimal_mis, optimal_mode,
     heuristic, power_beta, cutoff_threshold, technique_mode, techniques,
-    samples, time_budget, use_noise_target, noise_target, target, margin,
-    use_clear, seed); the rest come from context.scene.omis. techniques takes
-    identifiers ('UNOCCLUDED_SOLID_ANGLE') or SPEC names ('unoccluded/solid-angle');
-    giving techniques implies technique_mode='MANUAL'.
+    samples, time_budget, use_noise_target, noise_target, seed; the rest come
+    from context.scene.omis) and of Blender's bake settings (target, margin,
+    margin_type, use_clear, use_selected_to_active; the rest come from
+    context.scene.render.bake). techniques takes identifiers
+    ('UNOCCLUDED_SOLID_ANGLE') or SPEC names ('unoccluded/solid-angle'); giving
+    techniques implies technique_mode='MANUAL'.
     progress: optional callable(fraction) -> bool, called on this thread;
     returning False cancels. Raises BakeError or Cancelled; on either, no image
     or attribute is changed. Runs synchronously (also in background mode).
+    The returned dict includes error_mean and error_p95 (the texels' relative
+    error), seconds, and halving_seconds (extra time to halve the error).
     """
     from .settings import settings_from
-    if "techniques" in settings and "technique_mode" not in settings:
-        settings["technique_mode"] = 'MANUAL'
     try:
         s = settings_from(context.scene.omis, settings)
     except ValueError as exc:

@@ -5,7 +5,7 @@ import bpy
 
 from . import job as job_module
 from .errors import BakeError, Cancelled
-from .settings import SETTING_NAMES, operator_annotations, settings_from
+from .settings import ARGUMENT_NAMES, operator_annotations, settings_from
 
 # The bake running in the UI, if any (read by the panel).
 running = None
@@ -27,6 +27,25 @@ def _redraw_all(context):
             area.tag_redraw()
 
 
+def format_seconds(seconds):
+    """'42 s', '3 min 5 s', '2 h 10 min': a duration as an artist reads it."""
+    seconds = max(0.0, float(seconds))
+    if seconds < 10:
+        return f"{seconds:.1f} s"
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{int(seconds // 60)} min {int(seconds % 60)} s"
+    return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60)} min"
+
+
+def accuracy_line(stats):
+    """The accuracy reached and what halving it costs, in one sentence."""
+    return (f'error {100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
+            f'for 95 % of texels; halving it: about {format_seconds(stats["halving_seconds"])} '
+            f'more')
+
+
 def _report_stats(op, stats):
     for warning in stats["warnings"]:
         op.report({'WARNING'}, warning)
@@ -34,9 +53,22 @@ def _report_stats(op, stats):
         op.report({'INFO'}, "Baked into " + ", ".join(f'"{n}"' for n in stats["images"])
                   + ": save the images or pack them")
     op.report({'INFO'},
-              f'omis bake: {stats["seconds"]:.2f} s, {stats["samples_per_texel"]:.0f} samples '
-              f'per texel, mean relative error {100 * stats["mean_relative_error"]:.2f} % '
+              f'omis bake: {format_seconds(stats["seconds"])}, '
+              f'{stats["samples_per_texel"]:.0f} samples per texel, {accuracy_line(stats)} '
               f'({stats["status"]})')
+
+
+def progress_text(job):
+    """'42 % — about 12 s left (Plane → img)'."""
+    if job.cancel_requested:
+        return "cancelling…"
+    text = f"{100 * job.fraction:.0f} %"
+    left = job.seconds_left()
+    if left is not None:
+        text += f" — about {format_seconds(left)} left"
+    if job.current_label:
+        text += f" ({job.current_label})"
+    return text
 
 
 class OMIS_OT_bake(bpy.types.Operator):
@@ -56,7 +88,7 @@ class OMIS_OT_bake(bpy.types.Operator):
         return True
 
     def _settings(self, context):
-        overrides = {name: getattr(self, name) for name in SETTING_NAMES
+        overrides = {name: getattr(self, name) for name in ARGUMENT_NAMES
                      if self.properties.is_property_set(name)}
         return settings_from(context.scene.omis, overrides)
 
@@ -105,6 +137,9 @@ class OMIS_OT_bake(bpy.types.Operator):
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.modal_handler_add(self)
+        # The window manager's progress (Blender's bake uses the same), in per mille.
+        wm.progress_begin(0, 1000)
+        self._progress_open = True
         self._status(context, "starting")
         return {'RUNNING_MODAL'}
 
@@ -120,6 +155,9 @@ class OMIS_OT_bake(bpy.types.Operator):
         if getattr(self, "_timer", None) is not None:
             wm.event_timer_remove(self._timer)
             self._timer = None
+        if getattr(self, "_progress_open", False):
+            wm.progress_end()
+            self._progress_open = False
         running = None
         self._status(context, None)
 
@@ -132,7 +170,8 @@ class OMIS_OT_bake(bpy.types.Operator):
         if event.type == 'TIMER':  # ours or another one: polling more often is harmless
             if not job.done:
                 if not job.cancel_requested:
-                    self._status(context, f"{100 * job.fraction:.0f} % ({job.current_label})")
+                    context.window_manager.progress_update(int(1000 * job.fraction))
+                    self._status(context, progress_text(job))
                 return {'PASS_THROUGH'}
             self._stop(context)
             return self._finish(context, job, interactive=True)

@@ -7,71 +7,101 @@ from dataclasses import dataclass, fields
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
 
-# Technique identifiers (Blender style) and their SPEC §3 names, in a fixed order.
+# Technique identifiers (Blender style), their SPEC §3 names, the panel's label in an
+# artist's words (short enough for the default editor width) and the tooltip, which
+# keeps the research name.
 TECHNIQUES = (
-    ("BSDF", "bsdf", "BSDF", "Cosine-weighted hemisphere sampling"),
-    ("UNIFORM_AREA", "uniform/area", "Uniform · Area",
-     "Pick a light uniformly, sample its area"),
-    ("UNIFORM_SOLID_ANGLE", "uniform/solid-angle", "Uniform · Solid Angle",
-     "Pick a light uniformly, sample its solid angle"),
-    ("UNIFORM_PARALLEL", "uniform/parallel", "Uniform · Parallel",
-     "Pick a light uniformly, sample its parallel projection"),
-    ("POWER_AREA", "power/area", "Power · Area",
-     "Pick a light by emitted power, sample its area"),
-    ("POWER_SOLID_ANGLE", "power/solid-angle", "Power · Solid Angle",
-     "Pick a light by emitted power, sample its solid angle"),
-    ("POWER_PARALLEL", "power/parallel", "Power · Parallel",
-     "Pick a light by emitted power, sample its parallel projection"),
-    ("UNOCCLUDED_AREA", "unoccluded/area", "Unoccluded · Area",
-     "Pick a light by its unoccluded contribution at the point, sample its area"),
-    ("UNOCCLUDED_SOLID_ANGLE", "unoccluded/solid-angle", "Unoccluded · Solid Angle",
-     "Pick a light by its unoccluded contribution at the point, sample its solid angle"),
-    ("UNOCCLUDED_PARALLEL", "unoccluded/parallel", "Unoccluded · Parallel",
-     "Pick a light by its unoccluded contribution at the point, sample its parallel "
-     "projection"),
+    ("BSDF", "bsdf", "Surface Directions",
+     "Directions the surface scatters into (cosine-weighted BSDF sampling, 'bsdf'); "
+     "best for big, soft lights and the sky"),
+    ("UNIFORM_AREA", "uniform/area", "Any Light · Area",
+     "Each light equally often, a point on its area ('uniform/area')"),
+    ("UNIFORM_SOLID_ANGLE", "uniform/solid-angle", "Any Light · Angle",
+     "Each light equally often, a direction inside its visible outline "
+     "('uniform/solid-angle')"),
+    ("UNIFORM_PARALLEL", "uniform/parallel", "Any Light · Projected",
+     "Each light equally often, a point of its outline as seen from the surface "
+     "('uniform/parallel', parallel projection)"),
+    ("POWER_AREA", "power/area", "Bright Lights · Area",
+     "Brighter lights more often, a point on the light's area ('power/area')"),
+    ("POWER_SOLID_ANGLE", "power/solid-angle", "Bright Lights · Angle",
+     "Brighter lights more often, a direction inside its visible outline "
+     "('power/solid-angle')"),
+    ("POWER_PARALLEL", "power/parallel", "Bright Lights · Projected",
+     "Brighter lights more often, a point of its outline as seen from the surface "
+     "('power/parallel', parallel projection)"),
+    ("UNOCCLUDED_AREA", "unoccluded/area", "Near Lights · Area",
+     "The lights that light this point most (ignoring shadows) more often, a point on "
+     "the light's area ('unoccluded/area')"),
+    ("UNOCCLUDED_SOLID_ANGLE", "unoccluded/solid-angle", "Near Lights · Angle",
+     "The lights that light this point most (ignoring shadows) more often, a direction "
+     "inside the light's visible outline ('unoccluded/solid-angle')"),
+    ("UNOCCLUDED_PARALLEL", "unoccluded/parallel", "Near Lights · Projected",
+     "The lights that light this point most (ignoring shadows) more often, a point of "
+     "its outline as seen from the surface ('unoccluded/parallel', parallel projection)"),
 )
 TECHNIQUE_NAME = {ident: name for ident, name, _, _ in TECHNIQUES}
 TECHNIQUE_ID = {name: ident for ident, name, _, _ in TECHNIQUES}
 
 HEURISTICS = ("BALANCE", "POWER", "MAXIMUM", "CUTOFF")
 
+# Blender's own bake settings (scene.render.bake) that omis honours or refuses; the
+# operator and bake() take them as arguments like bpy.ops.object.bake does, and an
+# unset one comes from the scene. Blender's 'VERTEX_COLORS' target is omis'
+# 'COLOR_ATTRIBUTES'.
+OUTPUT_NAMES = ("target", "margin", "margin_type", "use_clear", "use_selected_to_active")
+TARGET_ALIASES = {'VERTEX_COLORS': 'COLOR_ATTRIBUTES'}
+
 
 def _props():
-    """Fresh bpy.props definitions, name -> property (a new set per owner class)."""
+    """Fresh bpy.props definitions of omis' own settings (`scene.omis`), name -> property
+    (a new set per owner class). Labels in an artist's words; the research names
+    (SPEC §1–3) in the tooltips."""
     return {
         "use_optimal_mis": BoolProperty(
-            name="Optimal MIS", default=True,
-            description="Combine the techniques with the optimal MIS weights (Kondapaneni et "
-                        "al. 2019); off: use the heuristic below"),
+            name="Least Noise", default=True,
+            description="Blend the sampling methods with the weights that give the least "
+                        "noise for the samples taken (optimal multiple importance sampling, "
+                        "Kondapaneni et al. 2019); off: a fixed blending rule (MIS heuristic)"),
         "optimal_mode": EnumProperty(
-            name="Mode", default='DIRECT',
-            items=(('DIRECT', "Direct", "Solve once from all samples (biased, consistent; "
-                                        "lowest noise)"),
-                   ('PROGRESSIVE', "Progressive", "Re-solve between rounds, weighting each "
-                                                  "round with earlier ones (unbiased)"))),
+            name="Weights", default='DIRECT',
+            description="When the least-noise weights are worked out",
+            items=(('DIRECT', "From All Samples",
+                    "Once, from all samples of a texel: least noise; a tiny bias that "
+                    "vanishes as samples grow ('optimal-direct')"),
+                   ('PROGRESSIVE', "Pass by Pass",
+                    "Anew after each pass, from the earlier passes: no bias, a little more "
+                    "noise ('optimal-progressive')"))),
         "heuristic": EnumProperty(
-            name="Heuristic", default='BALANCE',
-            description="MIS heuristic used when Optimal MIS is off",
-            items=(('BALANCE', "Balance", "Veach's balance heuristic"),
-                   ('POWER', "Power", "Power heuristic (exponent Beta)"),
-                   ('MAXIMUM', "Maximum", "All weight to the technique of highest density"),
-                   ('CUTOFF', "Cutoff", "Balance over techniques above Cutoff × the largest "
-                                        "density"))),
+            name="Blending", default='BALANCE',
+            description="How the sampling methods are blended when Least Noise is off "
+                        "(MIS heuristic)",
+            items=(('BALANCE', "Balance", "By each method's density (balance heuristic)"),
+                   ('POWER', "Power", "By each method's density raised to Beta (power "
+                                      "heuristic)"),
+                   ('MAXIMUM', "Maximum", "All to the method of highest density (maximum "
+                                          "heuristic)"),
+                   ('CUTOFF', "Cutoff", "Balance over the methods above Cutoff × the "
+                                        "largest density (cutoff heuristic)"))),
         "power_beta": FloatProperty(
             name="Beta", default=2.0, min=0.1, max=16.0,
             description="Exponent of the power heuristic"),
         "cutoff_threshold": FloatProperty(
             name="Cutoff", default=0.1, min=0.0, max=1.0,
-            description="Relative density below which the cutoff heuristic drops a technique"),
+            description="Relative density below which the cutoff heuristic drops a method"),
         "technique_mode": EnumProperty(
-            name="Techniques", default='AUTO',
-            items=(('AUTO', "Auto", "The scene's effect plan chooses the techniques"),
-                   ('MANUAL', "Manual", "Use the techniques ticked below, one sample each "
-                                        "per round"))),
+            name="Sampling", default='AUTO',
+            description="Which sampling methods (MIS techniques) look for the light",
+            items=(('AUTO', "Automatic", "Chosen for the scene's lights and emitters (the "
+                                         "effect plan), with sample counts"),
+                   ('MANUAL', "Manual", "The methods ticked below, one sample each per "
+                                        "round"))),
         "techniques": EnumProperty(
-            name="Technique Set", options={'ENUM_FLAG'},
+            name="Sampling Methods", options={'ENUM_FLAG'},
             default={'BSDF', 'UNOCCLUDED_SOLID_ANGLE'},
-            description="Sampling techniques combined by MIS (Manual mode)",
+            description="Sampling methods (MIS techniques) blended together (Manual "
+                        "sampling); giving them to the operator or to omis_bake.bake() "
+                        "implies Manual",
             items=tuple((ident, label, desc, 1 << i)
                         for i, (ident, _, label, desc) in enumerate(TECHNIQUES))),
         "samples": IntProperty(
@@ -82,43 +112,82 @@ def _props():
             unit='TIME_ABSOLUTE',
             description="Stop after this many seconds for the whole bake (0: no limit)"),
         "use_noise_target": BoolProperty(
-            name="Noise Target", default=False,
-            description="Stop sampling a texel once its estimated relative error is below "
-                        "the target"),
+            name="Noise Threshold", default=False,
+            description="Stop sampling a texel once its estimated noise (relative standard "
+                        "error) is below the threshold"),
         "noise_target": FloatProperty(
-            name="Noise Target", default=0.01, min=0.0001, max=1.0, precision=4,
-            description="Relative standard error at which a texel is done"),
-        "target": EnumProperty(
-            name="Target", default='IMAGE_TEXTURES',
-            items=(('IMAGE_TEXTURES', "Image Textures",
-                    "Bake into the image of each material's active Image Texture node"),
-                   ('COLOR_ATTRIBUTES', "Color Attributes",
-                    "Bake into the mesh's active color attribute"))),
-        "margin": IntProperty(
-            name="Margin", default=16, min=0, soft_max=64, subtype='PIXEL',
-            description="Extend the baked result as a post process filter (pixels)"),
-        "use_clear": BoolProperty(
-            name="Clear Image", default=True,
-            description="Clear the images before baking (else keep what is outside the "
-                        "baked islands)"),
+            name="Noise Threshold", default=0.01, min=0.0001, max=1.0, precision=4,
+            description="Noise (relative standard error) at which a texel is done: 0.01 "
+                        "means ±1 %"),
         "seed": IntProperty(
             name="Seed", default=0, min=0,
             description="Random seed: the same seed and settings give the same bake"),
     }
 
 
-# Shown after a bake; not operator arguments.
+def _output_props():
+    """Operator arguments mirroring scene.render.bake (never stored in scene.omis)."""
+    return {
+        "target": EnumProperty(
+            name="Target", default='IMAGE_TEXTURES',
+            description="Where to bake (default: Render Properties ▸ Bake ▸ Output ▸ Target)",
+            items=(('IMAGE_TEXTURES', "Image Textures",
+                    "Bake into the image of each material's active Image Texture node"),
+                   ('VERTEX_COLORS', "Active Color Attribute",
+                    "Bake into the mesh's active color attribute"),
+                   ('COLOR_ATTRIBUTES', "Color Attributes",
+                    "Same as Active Color Attribute (omis' earlier name)"))),
+        "margin": IntProperty(
+            name="Margin", default=16, min=0, soft_max=64, subtype='PIXEL',
+            description="Extend the baked result as a post process filter (pixels; default: "
+                        "Render Properties ▸ Bake ▸ Margin ▸ Size)"),
+        "margin_type": EnumProperty(
+            name="Margin Type", default='ADJACENT_FACES',
+            description="Which values fill the margin (default: Render Properties ▸ Bake ▸ "
+                        "Margin ▸ Type)",
+            items=(('ADJACENT_FACES', "Adjacent Faces", "Use pixels from adjacent faces "
+                                                         "across UV seams"),
+                   ('EXTEND', "Extend", "Extend border pixels outwards"))),
+        "use_clear": BoolProperty(
+            name="Clear Image", default=True,
+            description="Clear the images before baking (default: Render Properties ▸ Bake ▸ "
+                        "Output ▸ Clear Image)"),
+        "use_selected_to_active": BoolProperty(
+            name="Selected to Active", default=False,
+            description="Bake the selected objects onto the active one (not supported: "
+                        "refused with a message)"),
+    }
+
+
+# Shown after a bake; not operator arguments (see README: the bake's statistics).
 def _result_props():
     return {
-        "last_status": StringProperty(name="Last Status", default=""),
-        "last_seconds": FloatProperty(name="Last Time", default=0.0),
-        "last_samples_per_texel": FloatProperty(name="Last Samples per Texel", default=0.0),
-        "last_mean_error": FloatProperty(name="Last Mean Relative Error", default=0.0),
-        "last_plan": StringProperty(name="Last Effect Plan", default=""),
+        "last_status": StringProperty(name="Last Status", default="",
+                                      description="How the last bake ended"),
+        "last_seconds": FloatProperty(name="Last Time", default=0.0,
+                                      description="Seconds the last bake took, end to end"),
+        "last_samples_per_texel": FloatProperty(
+            name="Last Samples per Texel", default=0.0,
+            description="Mean samples per baked texel (or corner) of the last bake"),
+        "last_mean_error": FloatProperty(
+            name="Last Mean Error", default=0.0,
+            description="Mean over the baked texels of the estimated relative error "
+                        "(standard error / value) of the last bake"),
+        "last_error_p95": FloatProperty(
+            name="Last Error (95th percentile)", default=0.0,
+            description="95 % of the baked texels had at most this relative error"),
+        "last_halving_seconds": FloatProperty(
+            name="Last Halving Time", default=0.0,
+            description="Estimated extra seconds of sampling that would halve the error "
+                        "(noise falls as 1/√time)"),
+        "last_plan": StringProperty(name="Last Sampling Plan", default="",
+                                    description="The sampling methods and sample counts "
+                                                "chosen (the effect plan)"),
     }
 
 
 SETTING_NAMES = tuple(_props().keys())
+ARGUMENT_NAMES = SETTING_NAMES + OUTPUT_NAMES
 
 
 @dataclass
@@ -135,10 +204,13 @@ class Settings:
     time_budget: float = 0.0
     use_noise_target: bool = False
     noise_target: float = 0.01
+    seed: int = 0
+    # From scene.render.bake (or an operator / bake() argument):
     target: str = 'IMAGE_TEXTURES'
     margin: int = 16
+    margin_type: str = 'ADJACENT_FACES'
     use_clear: bool = True
-    seed: int = 0
+    use_selected_to_active: bool = False
 
     @property
     def strategy(self):
@@ -157,7 +229,8 @@ class Settings:
         """Raises ValueError naming the first unusable setting."""
         enums = {"optimal_mode": ('DIRECT', 'PROGRESSIVE'), "heuristic": HEURISTICS,
                  "technique_mode": ('AUTO', 'MANUAL'),
-                 "target": ('IMAGE_TEXTURES', 'COLOR_ATTRIBUTES')}
+                 "target": ('IMAGE_TEXTURES', 'COLOR_ATTRIBUTES'),
+                 "margin_type": ('EXTEND', 'ADJACENT_FACES')}
         for name, allowed in enums.items():
             if getattr(self, name) not in allowed:
                 raise ValueError(f"{name}: expected one of {', '.join(allowed)}, "
@@ -179,6 +252,15 @@ class Settings:
         if int(self.seed) < 0:
             raise ValueError("seed: must not be negative")
 
+    def unsupported(self):
+        """Why omis cannot bake what Blender's bake settings ask for, or None. These
+        are refused rather than silently baked differently."""
+        if self.use_selected_to_active:
+            return ("Selected to Active is not supported by omis: untick Render Properties ▸ "
+                    "Bake ▸ Selected to Active (scene.render.bake.use_selected_to_active = "
+                    "False, or use_selected_to_active=False), or use Cycles' own Bake for it")
+        return None
+
 
 def _normalise_techniques(value):
     """Accepts identifiers ('BSDF') or SPEC names ('bsdf', 'unoccluded/solid-angle')."""
@@ -191,20 +273,37 @@ def _normalise_techniques(value):
     return frozenset(out)
 
 
+def _blender_bake_settings(source):
+    """scene.render.bake of the scene owning `source` (scene.omis), or None."""
+    scene = getattr(source, "id_data", None)
+    render = getattr(scene, "render", None)
+    return getattr(render, "bake", None)
+
+
 def settings_from(source, overrides=None):
-    """Settings from an RNA struct (scene.omis or an operator), with overrides applied.
+    """Settings from scene.omis and the scene's own bake settings (scene.render.bake),
+    with overrides applied.
 
     overrides: a dict name -> value; unknown names raise TypeError like a bad
-    keyword argument would.
+    keyword argument would. Giving techniques without technique_mode implies
+    technique_mode='MANUAL' (so the operator, bake() and the panel agree).
     """
+    overrides = dict(overrides or {})
     values = {}
-    for f in fields(Settings):
-        v = getattr(source, f.name)
-        values[f.name] = frozenset(v) if f.name == "techniques" else v
-    for name, value in (overrides or {}).items():
+    for name in SETTING_NAMES:
+        v = getattr(source, name)
+        values[name] = frozenset(v) if name == "techniques" else v
+    blender = _blender_bake_settings(source)
+    defaults = Settings()
+    for name in OUTPUT_NAMES:
+        values[name] = getattr(blender, name) if blender is not None else getattr(defaults, name)
+    for name, value in overrides.items():
         if name not in values:
-            raise TypeError(f"unknown setting {name!r} (known: {', '.join(SETTING_NAMES)})")
+            raise TypeError(f"unknown setting {name!r} (known: {', '.join(ARGUMENT_NAMES)})")
         values[name] = _normalise_techniques(value) if name == "techniques" else value
+    if "techniques" in overrides and "technique_mode" not in overrides:
+        values["technique_mode"] = 'MANUAL'
+    values["target"] = TARGET_ALIASES.get(values["target"], values["target"])
     s = Settings(**values)
     s.check()
     return s
@@ -218,9 +317,10 @@ OMIS_PG_settings.__annotations__ = {**_props(), **_result_props()}
 
 
 def operator_annotations():
-    """Operator arguments: every setting, as SKIP_SAVE so an unset one means 'the scene's'."""
+    """Operator arguments: every setting and Blender's bake output settings, as SKIP_SAVE
+    so an unset one means 'the scene's'."""
     out = {}
-    for name, prop in _props().items():
+    for name, prop in {**_props(), **_output_props()}.items():
         # bpy.props return a deferred (function, keywords) pair; add SKIP_SAVE.
         function, keywords = prop.function, dict(prop.keywords)
         options = set(keywords.get("options", set())) | {'SKIP_SAVE'}

@@ -284,7 +284,10 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         ++n_covered;
     }
     if (settings.target == BakeTarget::Lightmap && settings.margin > 0) {
-        const std::vector<std::int64_t> source = margin_sources(coverage, settings.margin);
+        const std::vector<std::int64_t> source =
+            settings.margin_type == MarginType::AdjacentFaces
+                ? adjacent_margin_sources(coverage, mesh, settings.margin)
+                : margin_sources(coverage, settings.margin);
         for (std::size_t i = 0; i < count; ++i) {
             if (coverage.is_covered(i) || source[i] < 0) continue;
             for (int c = 0; c < 3; ++c) result.value[3 * i + c] = result.value[3 * source[i] + c];

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
 
 namespace omis {
@@ -24,6 +25,7 @@ struct BakeSettings {
     std::uint32_t mesh = 0;
     int width = 0, height = 0;  // lightmap size
     int margin = 16;            // texels of extension around UV islands
+    MarginType margin_type = MarginType::Extend;  // what fills them (uv_raster.h)
     bool smooth_normals = true; // interpolate corner normals (else flat)
     double time_budget = 0;     // seconds; 0 = none
     double noise_target = 0;    // relative standard error per texel; 0 = none

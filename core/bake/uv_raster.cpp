@@ -1,7 +1,9 @@
 #include "bake/uv_raster.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -139,6 +141,162 @@ std::vector<std::int64_t> margin_sources(const UvCoverage& c, int margin) {
             next.push_back(t);
         }
         frontier.swap(next);
+    }
+    return source;
+}
+
+namespace {
+
+// Triangle edges k (corner k to corner k+1) and the triangle across each in 3D.
+struct EdgeNeighbours {
+    static constexpr std::int64_t kNone = -1;
+    std::vector<std::array<std::int64_t, 3>> triangle;   // neighbour or kNone
+    std::vector<std::array<std::uint8_t, 3>> corner;     // its corner at our corner k
+
+    explicit EdgeNeighbours(const Mesh& mesh) {
+        const std::size_t T = mesh.num_triangles();
+        triangle.assign(T, {kNone, kNone, kNone});
+        corner.assign(T, {0, 0, 0});
+        // Edges with exactly two triangles are shared; more (non-manifold) are not.
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> edges;
+        for (std::uint32_t t = 0; t < T; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+                if (a != b) edges[{std::min(a, b), std::max(a, b)}].push_back(3 * t + k);
+            }
+        for (const auto& entry : edges) {
+            if (entry.second.size() != 2) continue;
+            for (int side = 0; side < 2; ++side) {
+                const std::uint32_t self = entry.second[side], other = entry.second[1 - side];
+                const std::uint32_t t = self / 3, o = other / 3;
+                const std::uint32_t vk = mesh.triangles[t][self % 3];
+                int c = 0;
+                while (c < 3 && mesh.triangles[o][c] != vk) ++c;
+                triangle[t][self % 3] = o;
+                corner[t][self % 3] = std::uint8_t(c);
+            }
+        }
+    }
+};
+
+struct Carried {
+    P2 point;                 // texel coordinates in the neighbour's UV triangle
+    std::int64_t triangle;    // the neighbour
+    double distance;          // of the original point from the crossed edge, texels
+};
+
+P2 texel_uv(const Mesh& mesh, const UvCoverage& c, std::uint32_t t, int corner) {
+    const auto& uv = mesh.corner_uvs[3 * t + corner];
+    return {uv[0] * c.width, uv[1] * c.height};
+}
+
+double cross(const P2& a, const P2& b, const P2& p) {
+    return (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x);
+}
+
+// The edge of triangle t nearest to p that p lies beyond (projecting inside
+// the edge's span), carried across to the triangle sharing that edge in 3D.
+bool carry_across(const Mesh& mesh, const UvCoverage& c, const EdgeNeighbours& nb,
+                  std::uint32_t t, const P2& p, Carried& out) {
+    int best = -1;
+    double best_d = 0, best_s = 0;
+    for (int k = 0; k < 3; ++k) {
+        const P2 a = texel_uv(mesh, c, t, k), b = texel_uv(mesh, c, t, (k + 1) % 3);
+        const P2 opposite = texel_uv(mesh, c, t, (k + 2) % 3);
+        const double ex = b.x - a.x, ey = b.y - a.y, len2 = ex * ex + ey * ey;
+        if (!(len2 > 0)) continue;
+        const double s = ((p.x - a.x) * ex + (p.y - a.y) * ey) / len2;
+        if (s < 0 || s > 1) continue;
+        const double side_p = cross(a, b, p), side_in = cross(a, b, opposite);
+        if (side_p == 0 || (side_p > 0) == (side_in > 0)) continue;  // not beyond this edge
+        const double d = std::abs(side_p) / std::sqrt(len2);
+        if (best < 0 || d < best_d) best = k, best_d = d, best_s = s;
+    }
+    if (best < 0 || nb.triangle[t][best] == EdgeNeighbours::kNone) return false;
+    const std::uint32_t o = std::uint32_t(nb.triangle[t][best]);
+    // The shared vertices in the neighbour: ours k → its ca, ours k+1 → its cb.
+    const int ca = nb.corner[t][best];
+    int cb = 0;
+    const std::uint32_t vb = mesh.triangles[t][(best + 1) % 3];
+    while (cb < 3 && mesh.triangles[o][cb] != vb) ++cb;
+    if (cb == 3 || cb == ca) return false;
+    const P2 a2 = texel_uv(mesh, c, o, ca), b2 = texel_uv(mesh, c, o, cb);
+    const P2 in2 = texel_uv(mesh, c, o, 3 - ca - cb);
+    const double ex = b2.x - a2.x, ey = b2.y - a2.y, len = std::sqrt(ex * ex + ey * ey);
+    if (!(len > 0)) return false;
+    P2 normal{-ey / len, ex / len};
+    if ((in2.x - a2.x) * normal.x + (in2.y - a2.y) * normal.y < 0)
+        normal = {-normal.x, -normal.y};
+    out.point = {a2.x + best_s * ex + best_d * normal.x, a2.y + best_s * ey + best_d * normal.y};
+    out.triangle = o;
+    out.distance = best_d;
+    return true;
+}
+
+bool same_uv_edge(const Mesh& mesh, std::uint32_t t, int k, std::uint32_t o, int ca) {
+    // Our corner k+1 against the neighbour's corner holding the same vertex.
+    const std::uint32_t vb = mesh.triangles[t][(k + 1) % 3];
+    int cb = 0;
+    while (cb < 3 && mesh.triangles[o][cb] != vb) ++cb;
+    return cb < 3 && mesh.corner_uvs[3 * t + k] == mesh.corner_uvs[3 * o + ca] &&
+           mesh.corner_uvs[3 * t + (k + 1) % 3] == mesh.corner_uvs[3 * o + cb];
+}
+
+// Where the margin texel at p takes its value from, starting at the island
+// triangle t nearest to it; -1 when no adjacent face gives one.
+std::int64_t adjacent_source(const Mesh& mesh, const UvCoverage& c, const EdgeNeighbours& nb,
+                             std::uint32_t t, const P2& p) {
+    Carried carried;
+    bool found = carry_across(mesh, c, nb, t, p, carried);
+    if (!found) {
+        // p may lie beyond a corner of t: try t's neighbours in the same island
+        // (sharing the edge's UVs too), nearest crossed edge first.
+        double best = 0;
+        for (int k = 0; k < 3; ++k) {
+            const std::int64_t o = nb.triangle[t][k];
+            if (o == EdgeNeighbours::kNone || !same_uv_edge(mesh, t, k, std::uint32_t(o),
+                                                            nb.corner[t][k]))
+                continue;
+            Carried candidate;
+            if (carry_across(mesh, c, nb, std::uint32_t(o), p, candidate) &&
+                (!found || candidate.distance < best)) {
+                carried = candidate, best = candidate.distance, found = true;
+            }
+        }
+    }
+    // The carried point must land on a texel of the neighbour (or of a triangle
+    // next to it); else, from there, cross on (a few steps, as Blender does).
+    for (int step = 0; found && step < 4; ++step) {
+        const int x = int(std::floor(carried.point.x)), y = int(std::floor(carried.point.y));
+        if (x < 0 || y < 0 || x >= c.width || y >= c.height) return -1;
+        const std::size_t texel = std::size_t(y) * c.width + x;
+        const std::uint32_t landed = c.triangle[texel];
+        const std::int64_t o = carried.triangle;
+        if (landed != kNoTriangle &&
+            (landed == o || nb.triangle[o][0] == landed || nb.triangle[o][1] == landed ||
+             nb.triangle[o][2] == landed))
+            return std::int64_t(texel);
+        const P2 from = carried.point;  // (carry_across overwrites `carried`)
+        found = carry_across(mesh, c, nb, std::uint32_t(o), from, carried);
+    }
+    return -1;
+}
+
+}  // namespace
+
+std::vector<std::int64_t> adjacent_margin_sources(const UvCoverage& c, const Mesh& mesh,
+                                                  int margin) {
+    std::vector<std::int64_t> source = margin_sources(c, margin);
+    if (!mesh.has_uvs() || margin <= 0) return source;
+    const EdgeNeighbours nb(mesh);
+    const int W = c.width;
+    for (std::size_t i = 0; i < source.size(); ++i) {
+        if (c.is_covered(i) || source[i] < 0) continue;
+        // The island triangle nearest to this margin texel (the Extend source's).
+        const std::uint32_t t = c.triangle[std::size_t(source[i])];
+        const P2 p{double(i % W) + 0.5, double(i / W) + 0.5};
+        const std::int64_t across = adjacent_source(mesh, c, nb, t, p);
+        if (across >= 0) source[i] = across;
     }
     return source;
 }

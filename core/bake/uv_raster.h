@@ -40,4 +40,18 @@ UvCoverage rasterize_uv(const Mesh& mesh, int width, int height);
 // "extend" margin. Returns, per texel, the source texel or -1.
 std::vector<std::int64_t> margin_sources(const UvCoverage& coverage, int margin);
 
+// How texels in the margin get their values (Blender's Bake ▸ Margin ▸ Type).
+enum class MarginType { Extend, AdjacentFaces };
+
+// Blender's "Adjacent Faces" margin: the same texels as margin_sources, but a
+// texel beyond an island's border edge takes its value from the triangle on
+// the other side of that edge in 3D (sharing its two vertices), wherever UV
+// seams put it: the texel's position relative to the edge (parameter along it,
+// distance from it) is carried over to the neighbour's UV edge, inwards. Texels
+// beyond mesh boundaries, or whose carried position lands on no covered texel
+// of the neighbourhood, fall back to the Extend source. Returns, per texel, the
+// source texel or -1.
+std::vector<std::int64_t> adjacent_margin_sources(const UvCoverage& coverage, const Mesh& mesh,
+                                                  int margin);
+
 }  // namespace omis

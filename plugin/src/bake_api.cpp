@@ -115,6 +115,12 @@ OMIS_API void omisSetBakeString(OMISBake bake, const char* name, const char* val
         const std::string v = value ? value : "";
         if (key == "techniques") b->techniques = v;
         else if (key == "strategy") b->strategy = v;
+        else if (key == "marginType") {
+            if (v == "extend") b->settings.margin_type = omis::MarginType::Extend;
+            else if (v == "adjacent-faces") b->settings.margin_type = omis::MarginType::AdjacentFaces;
+            else throw std::invalid_argument("marginType: expected 'extend' or 'adjacent-faces', "
+                                             "got '" + v + "'");
+        }
         else throw std::invalid_argument("name: unknown string bake parameter '" + key + "'");
     });
 }

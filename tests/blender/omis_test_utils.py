@@ -31,6 +31,10 @@ def reset_scene(engine='CYCLES'):
     scene = bpy.context.scene
     scene.world = None
     scene.render.engine = engine
+    # The margin these tests check is Extend; Adjacent Faces (Blender 3.4's
+    # default) has tests of its own (test_adjacent_margin.py).
+    scene.render.bake.margin_type = 'EXTEND'
+    scene.render.bake.use_selected_to_active = False
     c = scene.cycles
     c.device = 'CPU'
     c.use_denoising = False
@@ -214,3 +218,25 @@ def deg(x):
 
 def report_time(name, start):
     print(f"TIME {name}: {time.perf_counter() - start:.2f} s")
+
+
+class FakeLayout:
+    """Records what a panel draws (Blender cannot draw panels in background mode)."""
+
+    def __init__(self, log):
+        self.log = log
+
+    def __getattr__(self, name):
+        if name in ("row", "column", "box", "grid_flow", "split"):
+            return lambda *a, **k: FakeLayout(self.log)
+        if name == "label":
+            return lambda text="", **k: self.log.append(("label", text))
+        if name == "prop":
+            return lambda data, prop, **k: self.log.append(("prop", prop))
+        if name == "operator":
+            return lambda idname, **k: self.log.append(("operator", idname)) or FakeLayout(self.log)
+        raise AttributeError(name)
+
+    def __setattr__(self, name, value):
+        if name == "log":
+            object.__setattr__(self, name, value)

@@ -284,7 +284,10 @@ OMIS_API void omisReleaseBake(OMISBake bake);
  *   floats:   "timeBudget" [0 = none] seconds, "noiseTarget" [0 = none]
  *             relative standard error per texel, "beta" [2], "cutoff" [0.1]
  *   strings:  "techniques" [""] comma-separated names (SPEC §3), "" = the
- *             effect plan's default; "strategy" ["optimal-direct"]
+ *             effect plan's default; "strategy" ["optimal-direct"];
+ *             "marginType" ["extend"] or "adjacent-faces" (Blender's margin
+ *             types: extend the island's border texels, or take the texels
+ *             across UV seams from the adjacent faces)
  *   counts:   samples of each named technique per round [1 each]
  * A bake stops at the first budget reached: samples, time or noise. */
 OMIS_API void omisSetBakeInt(OMISBake bake, const char* name, int64_t value);
