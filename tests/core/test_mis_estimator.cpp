@@ -157,10 +157,14 @@ TEST_CASE("f in the span of the pdfs: optimal has (near) zero error", "[mis]") {
             CHECK(r.variance[0] <= 1e-20 * F * F + 1e-12 * F * F / 16);  // rounding of the moments
         }
     }
-    // Progressive: round 1 is balance, every later round is exact.
+    // Progressive: balance until 8 samples per free coefficient (k = 1, two
+    // samples a round: rounds 1–8), every later round exact. So its variance
+    // is that of 8 balance rounds out of 64: (8/64) of balance's. Each
+    // measured variance over 500 trials has a relative σ of √(2/499) ≈ 0.063,
+    // the ratio ≈ 0.09; 4 of those is the margin.
     const Trials t = run_trials(p, Strategy::OptimalProgressive, 64, 500, 3, F);
     const Trials b = run_trials(p, Strategy::Balance, 64, 500, 3, F);
-    CHECK(t.variance < b.variance / 16);
+    CHECK(t.variance < b.variance * (8.0 / 64) * (1 + 4 * 0.09));
 }
 
 TEST_CASE("α ∝ n reproduces the balance estimate bit for bit", "[mis]") {
