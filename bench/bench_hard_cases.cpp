@@ -2,6 +2,7 @@
 // count, the MSE of optimal-direct and optimal-progressive relative to the
 // balance heuristic, negative and zero texel counts, and bias/σ.
 //   omis_bench_hard_cases [copies] [reference rounds]
+//   omis_bench_hard_cases --cost STRATEGY SPP TEXELS   (see cost_run)
 // Errors are against a balance reference of `reference rounds` rounds over 16
 // copies; bias/σ is the rms over points of (mean error)/(σ of one balance
 // estimate at that spp), whose noise floor for an unbiased strategy is about
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 #include "../tests/hard_cases/hard_cases.h"
@@ -16,7 +18,42 @@
 using namespace omis;
 using namespace omis::hard_cases;
 
+// --cost STRATEGY SPP TEXELS: shade the first case's wall with its first two
+// techniques at SPP rounds (2·SPP samples per texel) and nothing else, for
+// instruction counts under callgrind (repeatable on a shared machine):
+// (Ir(optimal) − Ir(balance)) / (Ir(balance) − Ir(TEXELS = 0)) is optimal's
+// cost per sample over balance.
+int cost_run(const char* strategy_name_arg, int spp, int texels) {
+    const auto strategy = parse_strategy(strategy_name_arg);
+    if (!strategy || spp < 1 || texels < 0) {
+        std::fprintf(stderr, "--cost: need a strategy name, spp ≥ 1, texels ≥ 0\n");
+        return 2;
+    }
+    HardCase hc = suite()[0];
+    hc.techniques.resize(2);
+    Scene scene;
+    hc.build(scene);
+    scene.commit();
+    // Texels spread over the wall so no two share a position.
+    const HardCase row = hc;
+    hc.points.clear();
+    hc.normals.clear();
+    for (int i = 0; i < texels; ++i) {
+        const double t = (i + 0.5) / texels;
+        hc.points.push_back(Vec3(0, -0.9 + 1.8 * t, 0.1 + 1.7 * std::fmod(7.31 * t, 1.0)));
+        hc.normals.push_back(row.normals[0]);
+    }
+    const std::vector<double> v = run(scene, hc, *strategy, spp, 1, 42);
+    double sum = 0;
+    for (double x : v) sum += x;
+    std::printf("%s spp %d texels %d: mean %.6g\n", strategy_name(*strategy), spp, texels,
+                texels ? sum / (3 * texels) : 0.0);
+    return 0;
+}
+
 int main(int argc, char** argv) {
+    if (argc == 5 && std::string(argv[1]) == "--cost")
+        return cost_run(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
     const int copies = argc > 1 ? std::atoi(argv[1]) : 64;
     const int reference_rounds = argc > 2 ? std::atoi(argv[2]) : 4096;
     if (copies < 2 || reference_rounds < 1) {
