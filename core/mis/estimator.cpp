@@ -414,10 +414,8 @@ MisResult MisEstimator::result() const {
             const double S = R * samples_per_round_, k = solved.free_coefficients;
             for (int c = 0; c < C_; ++c)
                 out.variance[c] =
-                    solved.kept[c] ? pooled_round_variance(N_, C_, c, mo.a.data(), mo.b.data(),
-                                                           mo.m.data(), counts_.data(),
-                                                           solved.alpha.data()) *
-                                         S / (S - k - 1) * (S - 2) / (S - k - 2) / R
+                    solved.kept[c] ? solved.fit_variance[c] * S / (S - k - 1) * (S - 2) /
+                                         (S - k - 2) / R
                                    : heuristic_variance(c);
             for (int c = 0; c < C_; ++c)
                 if (out_of_range(out.estimate[c], c, kDirectFallbackSigmas, heuristic_variance(c))) {

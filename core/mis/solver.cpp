@@ -148,11 +148,10 @@ SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
     for (int c = 0; c < C; ++c) {
         bool keep = S > k + 2 && S >= min_samples_per_coefficient * (k + 1);
         for (int i = 0; i < N; ++i) keep = keep && std::isfinite(result.alpha[i * C + c]);
-        double shrink = 0;
+        double shrink = 0, p_fit = 0;
         if (keep && k > 0) {
             const double p_balance = pooled_round_variance(N, C, c, a, b, m, counts, zero.data());
-            const double p_fit =
-                pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data());
+            p_fit = pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data());
             const double v_balance = p_balance * S / (S - 1);
             const double v_optimal = p_fit * S / (S - k - 1) * (S - 2) / (S - k - 2);
             keep = v_optimal < v_balance;
@@ -170,6 +169,13 @@ SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
         result.kept[c] = keep;
         result.shrink[c] = keep ? shrink : 0.0;
         for (int i = 0; i < N; ++i) result.alpha[i * C + c] *= result.shrink[c];
+        // The residual variance at the final α, for the caller's error bar
+        // (computed here so that it is computed once).
+        result.fit_variance[c] =
+            keep && k > 0 && shrink == 1.0
+                ? p_fit
+                : keep ? pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data())
+                       : 0.0;
     }
     return result;
 }

@@ -60,6 +60,8 @@ struct SolveResult {
     int free_coefficients = 0;  // k of rule 3
     std::array<bool, kMaxSolveChannels> kept{};  // per channel: false when rule 3 fell back to balance
     std::array<double, kMaxSolveChannels> shrink{};  // per channel: rule 4's λ in [0, 1] (α was scaled by it)
+    // Per kept channel: pooled_round_variance at the returned α (else 0).
+    std::array<double, kMaxSolveChannels> fit_variance{};
 };
 
 // Moments accumulated over the samples (all divided by R, or all not):
