@@ -38,10 +38,9 @@ void accumulate_moments(int n_rt, int c_rt, const double* __restrict r,
 using MomentKernel = void (*)(int, int, const double*, const double*, double*, double*,
                               double*, double*);
 
-// optimal-progressive keeps the balance heuristic until it has this many
-// samples per free coefficient of α (+1): measured on the hard-case suite
-// (bench/bench_hard_cases.cpp), 8 removes its losses at 4–16 spp while
-// keeping most of the gain from 64 spp on.
+// optimal-progressive uses no α solved from fewer than this many samples per
+// free coefficient (+1): an α applied to other samples pays its whole
+// estimation error. Measured on the hard-case suite (bench_hard_cases).
 constexpr double kProgressiveSamplesPerCoefficient = 8;
 
 MomentKernel select_moment_kernel(int N, int C) {
@@ -121,7 +120,6 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
 
 void MisEstimator::reset() {
     rounds_ = 0;
-    last_rank_ = 0;
     in_round_.assign(N_, 0);
     round_left_ = samples_per_round_;
     sum_y_.assign(N_ * C_, 0.0);
@@ -132,12 +130,7 @@ void MisEstimator::reset() {
     b_.assign(optimal ? N_ * C_ : 0, 0.0);
     m_.assign(optimal ? C_ : 0, 0.0);
     c_.assign(optimal ? N_ : 0, 0.0);
-    const bool progressive = strategy_ == Strategy::OptimalProgressive;
-    round_f_.assign(progressive ? C_ : 0, 0.0);
-    round_c_.assign(progressive ? N_ : 0, 0.0);
-    round_alpha_.assign(progressive ? N_ * C_ : 0, 0.0);  // round 1: balance
-    mean_round_.assign(progressive ? C_ : 0, 0.0);
-    m2_round_.assign(progressive ? C_ : 0, 0.0);
+    snapshots_.clear();  // keeps its capacity: no allocation per point
     negative_f_.fill(false);
 }
 
@@ -222,10 +215,6 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
             negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
         }
         moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
-        if (strategy_ == Strategy::OptimalProgressive) {
-            for (int ch = 0; ch < C_; ++ch) round_f_[ch] += fq[ch];
-            for (int k = 0; k < N_; ++k) round_c_[k] += r[k];
-        }
     }
 
     // Y = w_t f / (n_t p_t); for the balance heuristic (and as the balance
@@ -277,34 +266,63 @@ void MisEstimator::finish_round() {
     std::fill(in_round_.begin(), in_round_.end(), 0);
     round_left_ = samples_per_round_;
     if (strategy_ != Strategy::OptimalProgressive) return;
-
-    // This round's estimate with the α solved before it (unbiased: α does not
-    // depend on this round's samples), folded into Welford statistics.
-    for (int c = 0; c < C_; ++c) {
-        const double e = round_f_[c] + correction(round_alpha_.data(), c, round_c_.data(), 1);
-        const double delta = e - mean_round_[c];
-        mean_round_[c] += delta / rounds_;
-        m2_round_[c] += delta * (e - mean_round_[c]);
-    }
-    std::fill(round_f_.begin(), round_f_.end(), 0.0);
-    std::fill(round_c_.begin(), round_c_.end(), 0.0);
-
-    // α for the next rounds, from every round so far, re-solved only when
-    // the round count reaches a power of two (epochs 1, 2, 3–4, 5–8, ...).
-    // Within an epoch one α serves every round, so the correction terms of
-    // its rounds cancel like the balance terms do under low-discrepancy
-    // draws (a new α every round breaks that cancellation and, at few
-    // rounds, costs more than the fresher α gains); and only log₂R solves
-    // are paid. Still unbiased: an epoch's α depends on earlier rounds only.
+    // Epoch boundaries for the cross-fit (see progressive_estimate): the
+    // running sums after rounds 1, 2, 4, 8, ...
     if ((rounds_ & (rounds_ - 1)) != 0) return;
-    Moments moments;
-    normalized_moments(moments);
-    const SolveResult solved = solve_optimal_alpha(N_, C_, moments.a.data(), moments.b.data(),
-                                                   moments.m.data(), counts_.data(),
-                                                   double(rounds_) * samples_per_round_,
-                                                   kProgressiveSamplesPerCoefficient);
-    round_alpha_.assign(solved.alpha.begin(), solved.alpha.begin() + N_ * C_);
-    last_rank_ = solved.rank;
+    snapshots_.insert(snapshots_.end(), a_.begin(), a_.end());
+    snapshots_.insert(snapshots_.end(), b_.begin(), b_.end());
+    snapshots_.insert(snapshots_.end(), m_.begin(), m_.end());
+    snapshots_.insert(snapshots_.end(), c_.begin(), c_.end());
+}
+
+void MisEstimator::progressive_estimate(MisResult& out) const {
+    // Cross-fitting over epochs of rounds [0,1), [1,2), [2,4), [4,8), ...:
+    // each epoch's control-variate correction uses the α solved from every
+    // OTHER round, so α is independent of the samples it corrects and the
+    // estimate stays unbiased (exactly so for independent rounds). Unlike
+    // "α from earlier rounds only", every round's balance error is corrected,
+    // the early ones too; that matters with low-discrepancy draws, whose
+    // early-round error does not shrink as the later rounds come in. One
+    // α per epoch also keeps the correction terms of an epoch cancelling
+    // like the balance terms do; log₂R + 1 solves in all.
+    const std::size_t block = a_.size() + b_.size() + m_.size() + c_.size();
+    std::vector<double> total(block), epoch(block);
+    std::copy(a_.begin(), a_.end(), total.begin());
+    std::copy(b_.begin(), b_.end(), total.begin() + a_.size());
+    std::copy(m_.begin(), m_.end(), total.begin() + a_.size() + b_.size());
+    std::copy(c_.begin(), c_.end(), total.begin() + a_.size() + b_.size() + m_.size());
+    const int boundaries = int(snapshots_.size() / block);  // at rounds 1, 2, 4, ...
+    for (int c = 0; c < C_; ++c) out.estimate[c] = balance_estimate(c);
+    int start = 0;
+    for (int e = 0; e <= boundaries; ++e) {
+        const int end = e < boundaries ? 1 << e : rounds_;
+        if (end <= start) continue;
+        const double* hi = e < boundaries ? &snapshots_[e * block] : total.data();
+        const double* lo = e > 0 ? &snapshots_[(e - 1) * block] : nullptr;
+        for (std::size_t i = 0; i < block; ++i) epoch[i] = hi[i] - (lo ? lo[i] : 0.0);
+        const int rest_rounds = rounds_ - (end - start);
+        if (rest_rounds > 0) {
+            Moments rest;
+            const double* ea = epoch.data();
+            const double* eb = ea + a_.size();
+            const double* em = eb + b_.size();
+            const double* ec = em + m_.size();
+            const double Rr = rest_rounds;
+            for (int i = 0; i < N_; ++i)
+                for (int j = i; j < N_; ++j)
+                    rest.a[i * N_ + j] = rest.a[j * N_ + i] = (a_[i * N_ + j] - ea[i * N_ + j]) / Rr;
+            for (int i = 0; i < N_ * C_; ++i) rest.b[i] = (b_[i] - eb[i]) / Rr;
+            for (int c = 0; c < C_; ++c) rest.m[c] = (m_[c] - em[c]) / Rr;
+            const SolveResult solved = solve_optimal_alpha(
+                N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
+                Rr * samples_per_round_, kProgressiveSamplesPerCoefficient);
+            const double share = double(end - start) / rounds_;
+            for (int c = 0; c < C_; ++c)
+                out.estimate[c] += share * correction(solved.alpha.data(), c, ec, end - start);
+            out.rank = std::max(out.rank, solved.rank);
+        }
+        start = end;
+    }
 }
 
 void MisEstimator::normalized_moments(Moments& out) const {
@@ -426,13 +444,12 @@ MisResult MisEstimator::result() const {
             break;
         }
         case Strategy::OptimalProgressive: {
-            out.rank = last_rank_;
+            progressive_estimate(out);
             for (int c = 0; c < C_; ++c) {
-                out.estimate[c] = mean_round_[c];
-                // Rounds are independent with a common mean, so the spread of
-                // the round estimates measures the average round variance.
-                out.variance[c] = rounds_ > 1 ? m2_round_[c] / (R - 1) / R
-                                              : heuristic_variance(c);
+                // Reported: the balance heuristic's variance, from the same
+                // samples. The cross-fit's α is kept only where predicted to
+                // beat balance, so this is an upper estimate where it is used.
+                out.variance[c] = heuristic_variance(c);
                 // Only the sign test: the estimate is unbiased and should stay
                 // so wherever it is a possible value.
                 if (out_of_range(out.estimate[c], c, 0, 0)) {

@@ -110,11 +110,10 @@ private:
                            double*, double*) = nullptr;
     std::vector<double> a_, b_, m_, c_;
 
-    // Progressive: the open round's Σ f/q and Σ p/q, its α, and Welford
-    // statistics of the per-round estimates.
-    std::vector<double> round_f_, round_c_, round_alpha_;
-    std::vector<double> mean_round_, m2_round_;
-    int last_rank_ = 0;
+    // Progressive: the running sums (a_, b_, m_, c_) after rounds 1, 2, 4,
+    // 8, ..., one block each: the epoch boundaries of the cross-fit.
+    std::vector<double> snapshots_;
+    void progressive_estimate(MisResult& out) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};
 };
