@@ -38,6 +38,11 @@ void accumulate_moments(int n_rt, int c_rt, const double* __restrict r,
 using MomentKernel = void (*)(int, int, const double*, const double*, double*, double*,
                               double*, double*);
 
+// optimal-progressive uses no α solved from fewer than this many samples per
+// free coefficient (+1): an α applied to other samples pays its whole
+// estimation error. Measured on the hard-case suite (bench_hard_cases).
+constexpr double kProgressiveSamplesPerCoefficient = 8;
+
 MomentKernel select_moment_kernel(int N, int C) {
     if (C == 3) {
         switch (N) {
@@ -115,7 +120,6 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
 
 void MisEstimator::reset() {
     rounds_ = 0;
-    last_rank_ = 0;
     in_round_.assign(N_, 0);
     round_left_ = samples_per_round_;
     sum_y_.assign(N_ * C_, 0.0);
@@ -126,12 +130,8 @@ void MisEstimator::reset() {
     b_.assign(optimal ? N_ * C_ : 0, 0.0);
     m_.assign(optimal ? C_ : 0, 0.0);
     c_.assign(optimal ? N_ : 0, 0.0);
-    const bool progressive = strategy_ == Strategy::OptimalProgressive;
-    round_f_.assign(progressive ? C_ : 0, 0.0);
-    round_c_.assign(progressive ? N_ : 0, 0.0);
-    round_alpha_.assign(progressive ? N_ * C_ : 0, 0.0);  // round 1: balance
-    mean_round_.assign(progressive ? C_ : 0, 0.0);
-    m2_round_.assign(progressive ? C_ : 0, 0.0);
+    snapshots_.clear();  // keeps its capacity: no allocation per point
+    negative_f_.fill(false);
 }
 
 double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
@@ -210,12 +210,11 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     if (is_optimal(strategy_)) {
         double r[kMaxMisTechniques], fq[kMaxMisChannels];
         for (int k = 0; k < N_; ++k) r[k] = pdfs[k] * inv_q;
-        for (int ch = 0; ch < C_; ++ch) fq[ch] = f[ch] * inv_q;
-        moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
-        if (strategy_ == Strategy::OptimalProgressive) {
-            for (int ch = 0; ch < C_; ++ch) round_f_[ch] += fq[ch];
-            for (int k = 0; k < N_; ++k) round_c_[k] += r[k];
+        for (int ch = 0; ch < C_; ++ch) {
+            fq[ch] = f[ch] * inv_q;
+            negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
         }
+        moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
     }
 
     // Y = w_t f / (n_t p_t); for the balance heuristic (and as the balance
@@ -267,26 +266,63 @@ void MisEstimator::finish_round() {
     std::fill(in_round_.begin(), in_round_.end(), 0);
     round_left_ = samples_per_round_;
     if (strategy_ != Strategy::OptimalProgressive) return;
+    // Epoch boundaries for the cross-fit (see progressive_estimate): the
+    // running sums after rounds 1, 2, 4, 8, ...
+    if ((rounds_ & (rounds_ - 1)) != 0) return;
+    snapshots_.insert(snapshots_.end(), a_.begin(), a_.end());
+    snapshots_.insert(snapshots_.end(), b_.begin(), b_.end());
+    snapshots_.insert(snapshots_.end(), m_.begin(), m_.end());
+    snapshots_.insert(snapshots_.end(), c_.begin(), c_.end());
+}
 
-    // This round's estimate with the α solved before it (unbiased: α does not
-    // depend on this round's samples), folded into Welford statistics.
-    for (int c = 0; c < C_; ++c) {
-        const double e = round_f_[c] + correction(round_alpha_.data(), c, round_c_.data(), 1);
-        const double delta = e - mean_round_[c];
-        mean_round_[c] += delta / rounds_;
-        m2_round_[c] += delta * (e - mean_round_[c]);
+void MisEstimator::progressive_estimate(MisResult& out) const {
+    // Cross-fitting over epochs of rounds [0,1), [1,2), [2,4), [4,8), ...:
+    // each epoch's control-variate correction uses the α solved from every
+    // OTHER round, so α is independent of the samples it corrects and the
+    // estimate stays unbiased (exactly so for independent rounds). Unlike
+    // "α from earlier rounds only", every round's balance error is corrected,
+    // the early ones too; that matters with low-discrepancy draws, whose
+    // early-round error does not shrink as the later rounds come in. One
+    // α per epoch also keeps the correction terms of an epoch cancelling
+    // like the balance terms do; log₂R + 1 solves in all.
+    const std::size_t block = a_.size() + b_.size() + m_.size() + c_.size();
+    std::vector<double> total(block), epoch(block);
+    std::copy(a_.begin(), a_.end(), total.begin());
+    std::copy(b_.begin(), b_.end(), total.begin() + a_.size());
+    std::copy(m_.begin(), m_.end(), total.begin() + a_.size() + b_.size());
+    std::copy(c_.begin(), c_.end(), total.begin() + a_.size() + b_.size() + m_.size());
+    const int boundaries = int(snapshots_.size() / block);  // at rounds 1, 2, 4, ...
+    for (int c = 0; c < C_; ++c) out.estimate[c] = balance_estimate(c);
+    int start = 0;
+    for (int e = 0; e <= boundaries; ++e) {
+        const int end = e < boundaries ? 1 << e : rounds_;
+        if (end <= start) continue;
+        const double* hi = e < boundaries ? &snapshots_[e * block] : total.data();
+        const double* lo = e > 0 ? &snapshots_[(e - 1) * block] : nullptr;
+        for (std::size_t i = 0; i < block; ++i) epoch[i] = hi[i] - (lo ? lo[i] : 0.0);
+        const int rest_rounds = rounds_ - (end - start);
+        if (rest_rounds > 0) {
+            Moments rest;
+            const double* ea = epoch.data();
+            const double* eb = ea + a_.size();
+            const double* em = eb + b_.size();
+            const double* ec = em + m_.size();
+            const double Rr = rest_rounds;
+            for (int i = 0; i < N_; ++i)
+                for (int j = i; j < N_; ++j)
+                    rest.a[i * N_ + j] = rest.a[j * N_ + i] = (a_[i * N_ + j] - ea[i * N_ + j]) / Rr;
+            for (int i = 0; i < N_ * C_; ++i) rest.b[i] = (b_[i] - eb[i]) / Rr;
+            for (int c = 0; c < C_; ++c) rest.m[c] = (m_[c] - em[c]) / Rr;
+            const SolveResult solved = solve_optimal_alpha(
+                N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
+                Rr * samples_per_round_, kProgressiveSamplesPerCoefficient);
+            const double share = double(end - start) / rounds_;
+            for (int c = 0; c < C_; ++c)
+                out.estimate[c] += share * correction(solved.alpha.data(), c, ec, end - start);
+            out.rank = std::max(out.rank, solved.rank);
+        }
+        start = end;
     }
-    std::fill(round_f_.begin(), round_f_.end(), 0.0);
-    std::fill(round_c_.begin(), round_c_.end(), 0.0);
-
-    // α for the next round, from every round so far.
-    Moments moments;
-    normalized_moments(moments);
-    const SolveResult solved = solve_optimal_alpha(N_, C_, moments.a.data(), moments.b.data(),
-                                                   moments.m.data(), counts_.data(),
-                                                   double(rounds_) * samples_per_round_);
-    round_alpha_.assign(solved.alpha.begin(), solved.alpha.begin() + N_ * C_);
-    last_rank_ = solved.rank;
 }
 
 void MisEstimator::normalized_moments(Moments& out) const {
@@ -323,10 +359,21 @@ double MisEstimator::correction(const double* alpha, int c, const double* c_sums
     return sum;
 }
 
-double MisEstimator::control_variate(const double* alpha, int c) const {
+double MisEstimator::balance_estimate(int c) const {
     double balance = 0;
     for (int k = 0; k < N_; ++k) balance += sum_y_[k * C_ + c];
-    return balance / rounds_ + correction(alpha, c, c_.data(), rounds_);
+    return balance / rounds_;
+}
+
+double MisEstimator::control_variate(const double* alpha, int c) const {
+    return balance_estimate(c) + correction(alpha, c, c_.data(), rounds_);
+}
+
+bool MisEstimator::out_of_range(double estimate, int c, double sigmas,
+                                double balance_variance) const {
+    if (!negative_f_[c] && estimate < 0) return true;
+    if (sigmas <= 0) return false;
+    return std::abs(estimate - balance_estimate(c)) > sigmas * std::sqrt(balance_variance);
 }
 
 std::vector<double> MisEstimator::control_variate_estimate(
@@ -378,27 +425,38 @@ MisResult MisEstimator::result() const {
                                     counts_.data(), R * samples_per_round_);
             out.rank = solved.rank;
             for (int c = 0; c < C_; ++c) out.estimate[c] = control_variate(solved.alpha.data(), c);
+            out.fell_back = 0;
             // Kept α: the unbiased residual variance of the fit times the cost of
             // estimating α (solver.h, rule 3); otherwise the estimate is the
             // balance heuristic's, and so is its variance.
             const double S = R * samples_per_round_, k = solved.free_coefficients;
             for (int c = 0; c < C_; ++c)
                 out.variance[c] =
-                    solved.kept[c] ? pooled_round_variance(N_, C_, c, mo.a.data(), mo.b.data(),
-                                                           mo.m.data(), counts_.data(),
-                                                           solved.alpha.data()) *
-                                         S / (S - k - 1) * (S - 2) / (S - k - 2) / R
+                    solved.kept[c] ? solved.fit_variance[c] * S / (S - k - 1) * (S - 2) /
+                                         (S - k - 2) / R
                                    : heuristic_variance(c);
+            for (int c = 0; c < C_; ++c)
+                if (out_of_range(out.estimate[c], c, kDirectFallbackSigmas, heuristic_variance(c))) {
+                    out.estimate[c] = balance_estimate(c);
+                    out.variance[c] = heuristic_variance(c);
+                    out.fell_back |= 1 << c;
+                }
             break;
         }
         case Strategy::OptimalProgressive: {
-            out.rank = last_rank_;
+            progressive_estimate(out);
             for (int c = 0; c < C_; ++c) {
-                out.estimate[c] = mean_round_[c];
-                // Rounds are independent with a common mean, so the spread of
-                // the round estimates measures the average round variance.
-                out.variance[c] = rounds_ > 1 ? m2_round_[c] / (R - 1) / R
-                                              : heuristic_variance(c);
+                // Reported: the balance heuristic's variance, from the same
+                // samples. The cross-fit's α is kept only where predicted to
+                // beat balance, so this is an upper estimate where it is used.
+                out.variance[c] = heuristic_variance(c);
+                // Only the sign test: the estimate is unbiased and should stay
+                // so wherever it is a possible value.
+                if (out_of_range(out.estimate[c], c, 0, 0)) {
+                    out.estimate[c] = balance_estimate(c);
+                    out.variance[c] = heuristic_variance(c);
+                    out.fell_back |= 1 << c;
+                }
             }
             break;
         }

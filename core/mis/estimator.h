@@ -21,7 +21,17 @@ struct MisResult {
     std::vector<double> variance;  // per channel: estimated variance of the estimate
     int rounds = 0;
     int rank = 0;  // optimal strategies: techniques kept by the last solve
+    // Optimal strategies: bit c set when channel c's estimate left the range
+    // the samples allow and the balance estimate was returned instead.
+    int fell_back = 0;
 };
+
+// optimal-direct falls back to the balance estimate when it differs from it
+// by more than this many of balance's own standard errors. The true
+// difference is the control variate's error, whose σ is at most balance's
+// (V_bal = V_opt + V[G_bal]); 4σ is beyond any honest correction, so the
+// rule fires on broken few-sample solves, not on real gains.
+constexpr double kDirectFallbackSigmas = 4.0;
 
 class MisEstimator {
 public:
@@ -69,6 +79,11 @@ private:
     void normalized_moments(Moments& out) const;
     // Balance estimate plus the control-variate correction for α (N×C).
     double control_variate(const double* alpha, int c) const;
+    double balance_estimate(int c) const;
+    // The per-estimate guard (issue 10): a channel's optimal estimate is out of
+    // range when it is negative although no sample had f < 0, or (sigmas > 0)
+    // when it lies more than `sigmas` balance standard errors from balance.
+    bool out_of_range(double estimate, int c, double sigmas, double balance_variance) const;
     // Σ_k β_k (1 − c_k/R) per channel with β = α less its inert n-component.
     double correction(const double* alpha, int c, const double* c_sums,
                       double rounds) const;
@@ -95,11 +110,12 @@ private:
                            double*, double*) = nullptr;
     std::vector<double> a_, b_, m_, c_;
 
-    // Progressive: the open round's Σ f/q and Σ p/q, its α, and Welford
-    // statistics of the per-round estimates.
-    std::vector<double> round_f_, round_c_, round_alpha_;
-    std::vector<double> mean_round_, m2_round_;
-    int last_rank_ = 0;
+    // Progressive: the running sums (a_, b_, m_, c_) after rounds 1, 2, 4,
+    // 8, ..., one block each: the epoch boundaries of the cross-fit.
+    std::vector<double> snapshots_;
+    void progressive_estimate(MisResult& out) const;
+    // Optimal strategies, per channel: whether any sample had f < 0.
+    std::array<bool, kMaxMisChannels> negative_f_{};
 };
 
 }  // namespace omis

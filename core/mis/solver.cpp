@@ -53,7 +53,7 @@ double pooled_round_variance(int N, int C, int c, const double* a, const double*
 
 SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
                                 const double* m, const int* counts,
-                                double total_samples) {
+                                double total_samples, double min_samples_per_coefficient) {
     SolveResult result;
     std::fill(result.alpha.begin(), result.alpha.begin() + std::min(N * C, int(result.alpha.size())),
               0.0);
@@ -146,19 +146,36 @@ SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
     result.free_coefficients = int(k);
     static constexpr std::array<double, kMaxTechniques * kMaxChannels> zero{};
     for (int c = 0; c < C; ++c) {
-        bool keep = S > k + 2;
+        bool keep = S > k + 2 && S >= min_samples_per_coefficient * (k + 1);
         for (int i = 0; i < N; ++i) keep = keep && std::isfinite(result.alpha[i * C + c]);
+        double shrink = 0, p_fit = 0;
         if (keep && k > 0) {
-            const double v_balance =
-                pooled_round_variance(N, C, c, a, b, m, counts, zero.data()) * S / (S - 1);
-            const double v_optimal =
-                pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data()) * S /
-                (S - k - 1) * (S - 2) / (S - k - 2);
+            const double p_balance = pooled_round_variance(N, C, c, a, b, m, counts, zero.data());
+            p_fit = pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data());
+            const double v_balance = p_balance * S / (S - 1);
+            const double v_optimal = p_fit * S / (S - k - 1) * (S - 2) / (S - k - 2);
             keep = v_optimal < v_balance;
+            // Rule 4: positive-part James–Stein shrinkage toward balance.
+            // The fit's in-sample variance reduction overstates the true one
+            // by k·σ²_res/S in expectation; the λ that minimises the variance
+            // of the control variate λ·α̂ is (true gain)/(in-sample gain).
+            const double in_sample_gain = p_balance - p_fit;
+            const double noise = k * p_fit / (S - k - 1);
+            shrink = in_sample_gain > noise ? 1.0 - noise / in_sample_gain : 0.0;
+        } else if (keep) {
+            shrink = 1.0;  // k = 0: α ∝ n, nothing to estimate
         }
+        keep = keep && shrink > 0;
         result.kept[c] = keep;
-        if (!keep)
-            for (int i = 0; i < N; ++i) result.alpha[i * C + c] = 0.0;
+        result.shrink[c] = keep ? shrink : 0.0;
+        for (int i = 0; i < N; ++i) result.alpha[i * C + c] *= result.shrink[c];
+        // The residual variance at the final α, for the caller's error bar
+        // (computed here so that it is computed once).
+        result.fit_variance[c] =
+            keep && k > 0 && shrink == 1.0
+                ? p_fit
+                : keep ? pooled_round_variance(N, C, c, a, b, m, counts, result.alpha.data())
+                       : 0.0;
     }
     return result;
 }

@@ -28,6 +28,16 @@
 //     removes the "salt & pepper" of few-sample solves and degrades
 //     toward the balance heuristic exactly when the gain does not pay.
 //
+//  4. A kept α is shrunk toward the balance solution: α ← λ α with the
+//     positive-part James–Stein factor λ = 1 − k·σ̂²_res/(S·ΔV̂), where ΔV̂ is
+//     the in-sample variance reduction of the fit and k·σ̂²_res/S its expected
+//     value when the true gain is zero. λ minimises the variance of the
+//     control variate λ·α̂ when α̂ = α* + ε with Cov ε ≈ σ²_res A⁻¹/S. It is a
+//     smooth version of rule 3: full α when the gain is clear, balance when
+//     it is within noise. Bias: none added for optimal-progressive (α still
+//     depends on earlier rounds only); for optimal-direct it scales the
+//     in-sample correction, so it scales that bias by λ ≤ 1 as well.
+//
 // Only the component of α orthogonal to n matters: adding t·n changes neither
 // the estimate nor its variance (Σ_i n_i a_ij = 1, Σ_i n_i b_i = F). So an α
 // proportional to n, up to rounding, *is* the balance heuristic.
@@ -49,15 +59,23 @@ struct SolveResult {
     int rank = 0;               // techniques kept by the pivoted factorisation
     int free_coefficients = 0;  // k of rule 3
     std::array<bool, kMaxSolveChannels> kept{};  // per channel: false when rule 3 fell back to balance
+    std::array<double, kMaxSolveChannels> shrink{};  // per channel: rule 4's λ in [0, 1] (α was scaled by it)
+    // Per kept channel: pooled_round_variance at the returned α (else 0).
+    std::array<double, kMaxSolveChannels> fit_variance{};
 };
 
 // Moments accumulated over the samples (all divided by R, or all not):
 //   a[i*N+j] = Σ p_i p_j / q²,  b[i*C+c] = Σ p_i f_c / q²,  m[c] = Σ f_c² / q².
 // counts[k] = n_k, total_samples = S (rule 3). At most 32 techniques and 4
 // channels; beyond that α = 0 (the caller validates sizes).
+// min_samples_per_coefficient: α = 0 (balance) while S < that × (k + 1); an α
+// applied to fresh samples (optimal-progressive) pays its whole estimation
+// error k·V/S, which the rule-4 estimate of the gain cannot see reliably from
+// a handful of samples.
 SolveResult solve_optimal_alpha(int N, int C, const double* a, const double* b,
                                 const double* m, const int* counts,
-                                double total_samples);
+                                double total_samples,
+                                double min_samples_per_coefficient = 0);
 
 // Pooled (unstratified) sample variance of one round's control-variate sum:
 // an upper bound of the stratified one that is never negative.

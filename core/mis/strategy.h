@@ -13,7 +13,7 @@ enum class Strategy {
     Maximum,
     Cutoff,
     OptimalDirect,       // solve once from all samples: biased, consistent
-    OptimalProgressive,  // re-solve between rounds: unbiased
+    OptimalProgressive,  // cross-fit: each epoch of rounds corrected with α from the others; unbiased
 };
 
 struct StrategyOptions {

@@ -1,0 +1,106 @@
+// The hard-case suite of issue 10 (tests/hard_cases): per case and sample
+// count, the MSE of optimal-direct and optimal-progressive relative to the
+// balance heuristic, negative and zero texel counts, and bias/σ.
+//   omis_bench_hard_cases [copies] [reference rounds]
+//   omis_bench_hard_cases --cost STRATEGY SPP TEXELS   (see cost_run)
+// Errors are against a balance reference of `reference rounds` rounds over 16
+// copies; bias/σ is the rms over points of (mean error)/(σ of one balance
+// estimate at that spp), whose noise floor for an unbiased strategy is about
+// 1/√copies.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "../tests/hard_cases/hard_cases.h"
+
+using namespace omis;
+using namespace omis::hard_cases;
+
+// --cost STRATEGY SPP TEXELS: shade the first case's wall with its first two
+// techniques at SPP rounds (2·SPP samples per texel) and nothing else, for
+// instruction counts under callgrind (repeatable on a shared machine):
+// (Ir(optimal) − Ir(balance)) / (Ir(balance) − Ir(TEXELS = 0)) is optimal's
+// cost per sample over balance.
+int cost_run(const char* strategy_name_arg, int spp, int texels) {
+    const auto strategy = parse_strategy(strategy_name_arg);
+    if (!strategy || spp < 1 || texels < 0) {
+        std::fprintf(stderr, "--cost: need a strategy name, spp ≥ 1, texels ≥ 0\n");
+        return 2;
+    }
+    HardCase hc = suite()[0];
+    hc.techniques.resize(2);
+    Scene scene;
+    hc.build(scene);
+    scene.commit();
+    // Texels spread over the wall so no two share a position.
+    const HardCase row = hc;
+    hc.points.clear();
+    hc.normals.clear();
+    for (int i = 0; i < texels; ++i) {
+        const double t = (i + 0.5) / texels;
+        hc.points.push_back(Vec3(0, -0.9 + 1.8 * t, 0.1 + 1.7 * std::fmod(7.31 * t, 1.0)));
+        hc.normals.push_back(row.normals[0]);
+    }
+    const std::vector<double> v = run(scene, hc, *strategy, spp, 1, 42);
+    double sum = 0;
+    for (double x : v) sum += x;
+    std::printf("%s spp %d texels %d: mean %.6g\n", strategy_name(*strategy), spp, texels,
+                texels ? sum / (3 * texels) : 0.0);
+    return 0;
+}
+
+int main(int argc, char** argv) {
+    if (argc == 5 && std::string(argv[1]) == "--cost")
+        return cost_run(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
+    const int copies = argc > 1 ? std::atoi(argv[1]) : 64;
+    const int reference_rounds = argc > 2 ? std::atoi(argv[2]) : 4096;
+    if (copies < 2 || reference_rounds < 1) {
+        std::fprintf(stderr, "usage: %s [copies ≥ 2] [reference rounds ≥ 1]\n", argv[0]);
+        return 2;
+    }
+    const Strategy strategies[3] = {Strategy::Balance, Strategy::OptimalDirect,
+                                    Strategy::OptimalProgressive};
+    std::printf("hard cases: %d copies of 8 points per case, spp = samples per technique\n"
+                "MSE ratios to balance (± 1 standard error of the paired ratio);"
+                " neg/zero texels and bias/σ as bal/dir/prog\n\n", copies);
+    double worst[2] = {0, 0};
+    for (const HardCase& hc : suite()) {
+        Scene scene;
+        hc.build(scene);
+        scene.commit();
+        const int points = int(hc.points.size());
+        const auto ref = reference(scene, hc, reference_rounds, 16, 987654321);
+        std::printf("%s (%zu techniques)\n", hc.name.c_str(), hc.techniques.size());
+        std::printf("  %5s %17s %17s %11s %11s %17s\n", "spp", "direct/balance",
+                    "progr/balance", "negative", "zero", "bias/σ");
+        for (int spp : {1, 4, 16, 64, 256}) {
+            Errors e[3];
+            for (int s = 0; s < 3; ++s)
+                e[s] = errors(run(scene, hc, strategies[s], spp, copies, 42), ref, points, copies);
+            double ratio[2], se[2];
+            for (int s = 0; s < 2; ++s) {
+                // Delta method for the ratio of two paired means.
+                const auto& x = e[s + 1].squared;
+                const auto& y = e[0].squared;
+                ratio[s] = e[s + 1].mse / e[0].mse;
+                double var = 0;
+                for (std::size_t i = 0; i < x.size(); ++i) {
+                    const double d = x[i] - ratio[s] * y[i];
+                    var += d * d / (x.size() - 1);
+                }
+                se[s] = std::sqrt(var / x.size()) / e[0].mse;
+                worst[s] = std::max(worst[s], ratio[s]);
+            }
+            std::printf("  %5d %9.3f ± %5.3f %9.3f ± %5.3f %3d/%3d/%3d %3d/%3d/%3d %5.2f/%5.2f/%5.2f\n",
+                        spp, ratio[0], se[0], ratio[1], se[1], e[0].negative, e[1].negative,
+                        e[2].negative, e[0].zero, e[1].zero, e[2].zero, bias_over_sigma(e[0], e[0]),
+                        bias_over_sigma(e[1], e[0]), bias_over_sigma(e[2], e[0]));
+        }
+        std::printf("\n");
+    }
+    std::printf("worst MSE ratio to balance: optimal-direct %.3f, optimal-progressive %.3f\n",
+                worst[0], worst[1]);
+    return 0;
+}

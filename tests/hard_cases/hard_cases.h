@@ -1,0 +1,59 @@
+// The hard-case suite of issue 10: scenes where optimal MIS used to lose to
+// the balance heuristic (few samples, grazing light, very unequal emitters,
+// lights below the horizon, penumbrae, dim corners). Shared by the test
+// (tests/core/test_hard_cases.cpp) and the benchmark (bench/bench_hard_cases.cpp).
+//
+// A case is a scene, a row of receiver points and a technique set; a run
+// lights `copies` independent copies of every point (each copy its own random
+// stream) with one sample per technique per round, so spp = rounds.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mis/strategy.h"
+#include "render/scene.h"
+
+namespace omis::hard_cases {
+
+struct HardCase {
+    std::string name;
+    std::function<void(Scene&)> build;  // adds meshes and lights (not committed)
+    std::vector<Vec3> points, normals;
+    std::vector<std::string> techniques;
+};
+
+std::vector<HardCase> suite();
+
+// RGB values of every (point, copy), point-major: [(p*copies + k)*3 + c].
+std::vector<double> run(const Scene& scene, const HardCase& hard_case, Strategy strategy,
+                        int spp, int copies, std::uint64_t seed);
+
+// Per point and channel, the mean of `copies` balance runs of `rounds` rounds:
+// the reference the errors are measured against.
+std::vector<double> reference(const Scene& scene, const HardCase& hard_case, int rounds,
+                              int copies, std::uint64_t seed);
+
+// Errors of one strategy's run against the reference, every channel of every
+// point scaled by the point's reference luminance (floored at a tenth of the
+// case's mean), so that each point weighs alike.
+struct Errors {
+    std::vector<double> squared;  // per (point, copy): Σ_c scaled error², same order as run()
+    double mse = 0;               // mean of `squared`
+    std::vector<double> bias, sigma;  // per (point, channel): mean error, σ of one estimate
+    int negative = 0;             // texels (point, copy) with a negative channel
+    int zero = 0;                 // texels with every channel exactly 0 where the reference is not
+};
+
+Errors errors(const std::vector<double>& values, const std::vector<double>& reference,
+              int points, int copies);
+
+// rms over points and channels of the mean error of `e` divided by the σ of
+// one balance estimate at the same sample count: how much a bias matters
+// against the noise balance would leave. Its noise floor is ≈ 1/√copies (and
+// the reference's error, far smaller).
+double bias_over_sigma(const Errors& e, const Errors& balance);
+
+}  // namespace omis::hard_cases
