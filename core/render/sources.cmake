@@ -4,5 +4,6 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/techniques.cpp
     ${CMAKE_CURRENT_LIST_DIR}/effect_plan.cpp
     ${CMAKE_CURRENT_LIST_DIR}/direct_lighting.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/light_selection.cpp
 )
 target_link_libraries(omis_core PUBLIC TBB::tbb)
