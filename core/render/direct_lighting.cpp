@@ -170,12 +170,20 @@ double PointLighting::Impl::pdf(std::uint32_t l, LightSampler sampler, const Vec
     return 0.0;
 }
 
-// Whether technique k has a light to draw at (x, n). `uniform`, `power` and
-// `tree` draw from the context's selectors, which need no per-point setup;
-// `unoccluded` tabulates every light's exact unoccluded irradiance here.
+// Whether technique k has a light to draw at (x, n). `tree` (and `uniform`,
+// `power` among many lights) draws from the context's selectors, which need
+// no per-point setup; otherwise a table over the lights that reach x is made
+// here (`unoccluded`: by their exact unoccluded irradiance). A technique
+// with no light to draw at x leaves the point's MIS system.
 bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     const Technique& t = p_.settings.techniques[k];
-    if (const LightSelector* s = p_.selector(t.selection)) return !s->empty();
+    if (const LightSelector* s = p_.selector(t.selection)) {
+        if (s->empty() || !s->may_reach(x, n)) return false;
+        if (p_.integrated.size() > std::size_t(kManyIntegratedLights)) return true;
+        for (std::uint32_t l : p_.integrated)
+            if (sampler_applies(p_.scene.lights()[l], t.sampler, x, n)) return true;
+        return false;
+    }
     LightChoice& c = choices_[k];
     c.lights.clear();
     c.probability.clear();
@@ -526,9 +534,12 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         power.push_back(light.power(scene.bounding_radius()));
     }
     const double radius = scene.bounding_radius();
+    // Few lights: `uniform` and `power` keep their per-point tables over the
+    // lights that reach x (no draw wasted on the others).
+    const bool many = integrated.size() > std::size_t(kManyIntegratedLights);
     for (int k : techniques) {
         const Technique& t = settings.techniques[k];
-        if (t.bsdf) continue;
+        if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
         if (t.selection == LightSelection::Uniform && uniform_selector.empty())
             uniform_selector = LightSelector(LightSelector::Kind::Uniform, scene.lights(), integrated, radius);
         if (t.selection == LightSelection::Power && power_selector.empty())
@@ -542,8 +553,8 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {
     switch (selection) {
-        case LightSelection::Uniform: return &uniform_selector;
-        case LightSelection::Power: return &power_selector;
+        case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
+        case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
         case LightSelection::Tree: return &tree_selector;
         case LightSelection::Unoccluded: return nullptr;
     }

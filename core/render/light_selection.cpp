@@ -236,6 +236,11 @@ double LightSelector::tree_probability(const Vec3& x, const Vec3& n) const {
     return nodes_[0].bounds.importance(x, n) > 0 ? 1.0 / choices : 0.0;
 }
 
+bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
+    if (kind_ != Kind::Tree) return !ids_.empty();
+    return !unbounded_.empty() || tree_probability(x, n) > 0;
+}
+
 std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
                                                    double u) const {
     if (ids_.empty()) return std::nullopt;

@@ -42,6 +42,9 @@ public:
     std::size_t size() const { return ids_.size(); }
     bool empty() const { return ids_.empty(); }
 
+    // False only where no light can reach (x, n) (tree: by its bounds; the
+    // others do not know and say true).
+    bool may_reach(const Vec3& x, const Vec3& n) const;
     // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
     // (tree only: every bound says so).
     std::optional<SelectedLight> sample(const Vec3& x, const Vec3& n, double u) const;
