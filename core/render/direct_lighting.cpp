@@ -62,7 +62,7 @@ struct PointLighting::Impl {
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
-    std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u) const;
+    std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
@@ -108,6 +108,7 @@ struct PointLighting::Impl {
         std::uint32_t light = ~0u;
         Vec3 w;
     } drawn_;  // the last light sample: its light surely lies along its direction
+    LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
 };
 
 const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
@@ -216,9 +217,9 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
 }
 
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
-                                                             const Vec3& n, double u) const {
+                                                             const Vec3& n, double u) {
     const Technique& t = p_.settings.techniques[k];
-    if (const LightSelector* s = p_.selector(t.selection)) return s->sample(x, n, u);
+    if (const LightSelector* s = p_.selector(t.selection)) return s->sample(x, n, u, &memo_);
     const LightChoice& c = choices_[k];
     const std::size_t i = std::min<std::size_t>(
         std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1);
@@ -311,7 +312,7 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         double pdf = 0;
         const std::vector<std::uint32_t>& along = lights_along(x, w);
         for (std::uint32_t l : along) {
-            const double pmf = s->pmf(x, n, l);
+            const double pmf = s->pmf(x, n, l, &memo_);
             if (pmf > 0) pdf += pmf * this->pdf(l, t.sampler, x, n, w);
         }
         counters.pdf_evaluations += along.size();
@@ -372,7 +373,7 @@ void PointLighting::Impl::add_delta_lights(std::uint64_t stream, int first_round
     for (int r = first_round; r < first_round + rounds; ++r)
         for (int j = 0; j < per_round; ++j) {
             const double u = shift + double(r * per_round + j) * 0.6180339887498949;
-            const auto pick = p_.delta_selector.sample(x, n, u - std::floor(u));
+            const auto pick = p_.delta_selector.sample(x, n, u - std::floor(u), &delta_memo_);
             if (!pick) continue;
             const Light& light = p_.scene.lights()[pick->light];
             const auto d = delta_illumination(light, x, n);

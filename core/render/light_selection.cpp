@@ -69,10 +69,18 @@ LightSelector::Bounds box_of(std::initializer_list<Vec3> points) {
 // cosine bounds at the emitter (θ' = θw − θo − θb must stay within θe) and at
 // the receiver (θi − θb below the horizon gives nothing). θb bounds the angle
 // the box subtends from x, so every light in the box gets at most this.
-double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n) const {
+void LightSelector::Bounds::finish() {
+    centre = (lo + hi) * 0.5;
+    radius2 = 0.25 * dot(hi - lo, hi - lo);
+    sin_theta_o = std::sqrt(std::max(0.0, 1 - cos_theta_o * cos_theta_o));
+}
+
+namespace {
+
+double importance_of(const Vec3& centre, double radius2, double power, const Vec3& axis,
+                     double cos_theta_o, double sin_theta_o, double cos_theta_e,
+                     bool two_sided, const Vec3& x, const Vec3& n) {
     if (!(power > 0)) return 0;
-    const Vec3 centre = (lo + hi) * 0.5;
-    const double radius2 = 0.25 * dot(hi - lo, hi - lo);
     const Vec3 d = x - centre;
     const double dist2 = dot(d, d);
     if (dist2 <= radius2) return power / std::max(radius2, 1e-300);  // x among the lights
@@ -81,13 +89,60 @@ double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n) const {
     double cos_w = dot(axis, wi);
     if (two_sided) cos_w = std::abs(cos_w);
     const double cos_b = std::sqrt(std::max(0.0, 1 - radius2 / dist2));
-    const double cos_x = cos_subtract_clamped(cos_w, cos_theta_o);
+    double cos_x = 1;  // cos(max(0, θw − θo))
+    if (cos_w < cos_theta_o) {
+        const double sin_w = std::sqrt(std::max(0.0, 1 - cos_w * cos_w));
+        cos_x = cos_w * cos_theta_o + sin_w * sin_theta_o;
+    }
     const double cos_p = cos_subtract_clamped(cos_x, cos_b);
     // A small allowance keeps lights exactly at a bound's edge sampleable.
     if (cos_p < cos_theta_e - 1e-9) return 0;
     const double cos_i = cos_subtract_clamped(-dot(n, wi), cos_b);
     if (cos_i < -1e-9) return 0;
     return power * std::max(cos_p, 1e-9) * std::max(cos_i, 1e-9) / std::max(dist2, radius2);
+}
+
+float round_down(double v) {
+    float f = float(v);
+    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+}
+float round_up(double v) {
+    float f = float(v);
+    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+}
+
+}  // namespace
+
+double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n) const {
+    return importance_of(centre, radius2, power, axis, cos_theta_o, sin_theta_o, cos_theta_e,
+                         two_sided, x, n);
+}
+
+LightSelector::PackedBounds::PackedBounds(const Bounds& b) {
+    // The rounded centre moves by up to `shift`: the radius grows by as much.
+    double shift2 = 0;
+    for (int i = 0; i < 3; ++i) {
+        centre[i] = float(b.centre[i]);
+        shift2 += (b.centre[i] - centre[i]) * (b.centre[i] - centre[i]);
+    }
+    radius = round_up(std::sqrt(b.radius2) + std::sqrt(shift2));
+    power = b.power > 0 ? std::max(float(b.power), 1e-30f) : 0.0f;
+    for (int i = 0; i < 3; ++i) axis[i] = float(b.axis[i]);
+    // The rounded axis is off by ~1e-7 rad: widen both cones by 1e-6 rad.
+    const double widen = 1e-6, theta_o = std::acos(std::clamp(b.cos_theta_o, -1.0, 1.0));
+    cos_theta_o = round_down(std::cos(std::min(kPi, theta_o + widen)));
+    // cos rounded down, sin up: cos(θw − θo) only grows.
+    sin_theta_o = round_up(std::sin(std::min(kPi, theta_o + widen)));
+    const double theta_e = std::acos(std::clamp(b.cos_theta_e, -1.0, 1.0));
+    cos_theta_e = round_down(std::cos(std::min(kPi, theta_e + widen)));
+    two_sided = b.two_sided;
+}
+
+double LightSelector::PackedBounds::importance(const Vec3& x, const Vec3& n) const {
+    const double r = radius;
+    return importance_of(Vec3(centre[0], centre[1], centre[2]), r * r, power,
+                         Vec3(axis[0], axis[1], axis[2]), cos_theta_o, sin_theta_o,
+                         cos_theta_e, two_sided, x, n);
 }
 
 std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
@@ -124,6 +179,7 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
             // off the direction to x; a delta light only along it.
             b.cos_theta_e = l.radius > 0 ? 0.0 : 1.0;
             b.power = l.power(scene_radius);
+            b.finish();
             return b;
         }
         case LightType::Sun:
@@ -135,6 +191,7 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
     b.cos_theta_e = l.spread < kPi ? std::cos(0.5 * l.spread) : 0.0;
     b.two_sided = l.two_sided;
     b.power = l.power(scene_radius);
+    b.finish();
     return b;
 }
 
@@ -179,6 +236,7 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
         trail_.assign(ids_.size(), 0);
         depth_.assign(ids_.size(), 0);
         if (!entries.empty()) build(entries, 0, entries.size(), 0, 0);
+        build_bounds_ = {};
     }
 }
 
@@ -190,8 +248,10 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
     if (depth >= 64) throw std::length_error("light tree: deeper than 64 levels");
     const std::uint32_t index = std::uint32_t(nodes_.size());
     nodes_.emplace_back();
+    build_bounds_.emplace_back();
     if (end - begin == 1) {
-        nodes_[index].bounds = entries[begin].bounds;
+        build_bounds_[index] = entries[begin].bounds;
+        nodes_[index].bounds = PackedBounds(entries[begin].bounds);
         nodes_[index].light = entries[begin].light;
         const std::int64_t slot = slot_[entries[begin].light];
         trail_[slot] = trail;
@@ -216,7 +276,10 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
     const std::uint32_t second =
         build(entries, mid, end, trail | (std::uint64_t(1) << depth), depth + 1);
     nodes_[index].second_child = second;
-    nodes_[index].bounds = merge(nodes_[first].bounds, nodes_[second].bounds);
+    Bounds& b = build_bounds_[index];
+    b = merge(build_bounds_[first], build_bounds_[second]);
+    b.finish();
+    nodes_[index].bounds = PackedBounds(b);
     return index;
 }
 
@@ -226,6 +289,34 @@ double LightSelector::first_child_probability(const Node& node, const Vec3& x,
     const double b = nodes_[node.second_child].bounds.importance(x, n);
     if (!(a + b > 0)) return std::nan("");  // neither child can reach (x, n)
     return a / (a + b);
+}
+
+double LightSelector::first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
+                                              Memo* memo) const {
+    if (!memo) return first_child_probability(node, x, n);
+    if (memo->owner != this || memo->stamps.size() != nodes_.size()) {
+        memo->owner = this;
+        memo->stamps.assign(nodes_.size(), 0);
+        memo->first_child.assign(nodes_.size(), 0.0);
+        memo->stamp = 0;
+    }
+    const bool same = memo->stamp > 0 && memo->x.x == x.x && memo->x.y == x.y &&
+                      memo->x.z == x.z && memo->n.x == n.x && memo->n.y == n.y &&
+                      memo->n.z == n.z;
+    if (!same) {
+        if (++memo->stamp == 0) {  // wrapped: forget everything
+            std::fill(memo->stamps.begin(), memo->stamps.end(), 0);
+            memo->stamp = 1;
+        }
+        memo->x = x;
+        memo->n = n;
+    }
+    const std::size_t i = std::size_t(&node - nodes_.data());
+    if (memo->stamps[i] != memo->stamp) {
+        memo->stamps[i] = memo->stamp;
+        memo->first_child[i] = first_child_probability(node, x, n);
+    }
+    return memo->first_child[i];
 }
 
 // Probability of drawing from the tree rather than an unbounded light, at a
@@ -241,8 +332,8 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
     return !unbounded_.empty() || tree_probability(x, n) > 0;
 }
 
-std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
-                                                   double u) const {
+std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n, double u,
+                                                   Memo* memo) const {
     if (ids_.empty()) return std::nullopt;
     u = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
     if (kind_ == Kind::Uniform) {
@@ -263,7 +354,7 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     u = std::min(u * double(choices) - double(pick), std::nextafter(1.0, 0.0));
     const Node* node = &nodes_[0];
     while (node->light == ~0u) {
-        const double p = first_child_probability(*node, x, n);
+        const double p = first_child_probability(*node, x, n, memo);
         if (!(p >= 0)) return std::nullopt;
         if (u < p) {
             u = std::min(u / p, std::nextafter(1.0, 0.0));
@@ -279,7 +370,8 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     return SelectedLight{node->light, pmf};
 }
 
-double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light) const {
+double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
+                          Memo* memo) const {
     if (light >= slot_.size() || slot_[light] < 0) return 0;
     const std::size_t slot = std::size_t(slot_[light]);
     if (kind_ == Kind::Uniform) return 1.0 / double(ids_.size());
@@ -290,7 +382,7 @@ double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light) con
     double pmf = tree_probability(x, n);
     const Node* node = nodes_.empty() ? nullptr : &nodes_[0];
     for (int level = 0; pmf > 0 && node && node->light == ~0u; ++level) {
-        const double p = first_child_probability(*node, x, n);
+        const double p = first_child_probability(*node, x, n, memo);
         if (!(p >= 0)) return 0;
         if ((trail_[slot] >> level) & 1) {
             pmf *= 1 - p;
