@@ -10,7 +10,7 @@
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
-// Flags: --quick (fewer receivers).
+// Flags: --quick (fewer receivers), --only sphere|point|area.
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -128,12 +128,11 @@ Row time_scene(const std::string& family, int emitters,
         }
         best = std::min(best, seconds_since(start));
     }
-    // Draws per point: the MIS samples, or for delta-only scenes the delta
-    // lights drawn (or looped over).
+    // Texel-samples per point: the MIS samples; in delta-only scenes, one per
+    // round (a round draws one delta light, or loops over few).
     int per_point = 0;
     for (int n : s.samples) per_point += n * s.rounds;
-    if (per_point == 0)
-        per_point = context.plan.sample_delta_lights ? context.plan.delta_samples * s.rounds : 1;
+    if (per_point == 0) per_point = s.rounds;
     const double texel_samples = double(count) * per_point;
     std::string names;
     for (const Technique& t : s.techniques) names += (names.empty() ? "" : "+") + t.name();
@@ -144,21 +143,35 @@ Row time_scene(const std::string& family, int emitters,
 }  // namespace
 
 int main(int argc, char** argv) {
-    const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+    bool quick = false;
+    std::string only;  // --only FAMILY: time one family (for profiling)
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--quick") == 0) quick = true;
+        else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area]\n", argv[0]);
+            return 2;
+        }
+    }
+    const auto wanted = [&](const char* family) { return only.empty() || only == family; };
     const int grid = quick ? 12 : 32;
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
     std::vector<Row> rows;
     const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
-    for (auto [stacks, slices] : spheres)
-        rows.push_back(time_scene("emissive sphere", 2 * slices * (stacks - 1),
-                                  [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid));
-    for (int side : {1, 4, 16, 100})
-        rows.push_back(time_scene("point lights", side * side,
-                                  [&](Scene& s) { add_point_grid(s, side); }, grid));
-    for (int side : {1, 4, 16, 100})
-        rows.push_back(time_scene("area lights", side * side,
-                                  [&](Scene& s) { add_area_grid(s, side); }, grid));
+    if (wanted("sphere"))
+        for (auto [stacks, slices] : spheres)
+            rows.push_back(time_scene("emissive sphere", 2 * slices * (stacks - 1),
+                                      [&](Scene& s) { add_emissive_sphere(s, stacks, slices); },
+                                      grid));
+    if (wanted("point"))
+        for (int side : {1, 4, 16, 100})
+            rows.push_back(time_scene("point lights", side * side,
+                                      [&](Scene& s) { add_point_grid(s, side); }, grid));
+    if (wanted("area"))
+        for (int side : {1, 4, 16, 100})
+            rows.push_back(time_scene("area lights", side * side,
+                                      [&](Scene& s) { add_area_grid(s, side); }, grid));
 
     std::printf("time per texel-sample, one thread, %d receivers, 4 rounds of the default techniques\n",
                 grid * grid);

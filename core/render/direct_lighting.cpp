@@ -26,18 +26,25 @@ namespace {
 // depth of it is the emitter itself or a coplanar neighbour, not a blocker.
 constexpr double kEmitterDepthTolerance = 1e-4;
 
-// A triangle smaller than this in solid angle (sr, estimated as area over the
-// squared distance to its centroid) is sampled by area for `solid-angle`: the
-// spherical triangle's setup would cost more than it saves, and the two
-// densities nearly agree there. A function of (x, triangle) only, so pdf
-// evaluation makes the same choice as sampling.
+// A triangle or rect smaller than this in solid angle (sr, estimated as area
+// over the squared distance to its centroid) is sampled by area for
+// `solid-angle`: the spherical polygon's setup would cost more than it saves,
+// and the two densities nearly agree there. A function of (x, light) only, so
+// pdf evaluation makes the same choice as sampling.
 constexpr double kTinySolidAngle = 1e-3;
 
-bool tiny_triangle(const Light& light, const Vec3& x) {
-    if (light.type != LightType::Triangle) return false;
-    const TriangleLight& t = light.triangle;
-    const Vec3 d = (t.p0 + t.p1 + t.p2) / 3.0 - x;
-    return t.area() < kTinySolidAngle * dot(d, d);
+bool tiny_in_solid_angle(const Light& light, const Vec3& x) {
+    if (light.type == LightType::Triangle) {
+        const TriangleLight& t = light.triangle;
+        const Vec3 d = (t.p0 + t.p1 + t.p2) / 3.0 - x;
+        return t.area() < kTinySolidAngle * dot(d, d);
+    }
+    if (light.type == LightType::Rect) {
+        const RectLight& r = light.rect;
+        const Vec3 d = r.corner + (r.edge_u + r.edge_v) * 0.5 - x;
+        return r.area() < kTinySolidAngle * dot(d, d);
+    }
+    return false;
 }
 
 // A light technique at one point (`unoccluded`, exact per light): the lights
@@ -134,7 +141,7 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, LightSam
                                                        const Vec3& x, const Vec3& n, double u1,
                                                        double u2) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == LightSampler::SolidAngle && tiny_triangle(light, x)) sampler = LightSampler::Area;
+    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
     const SolidAngleCache* c =
         sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
     std::optional<LightSample> s;
@@ -162,7 +169,7 @@ std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCa
 double PointLighting::Impl::pdf(std::uint32_t l, LightSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == LightSampler::SolidAngle && tiny_triangle(light, x)) sampler = LightSampler::Area;
+    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
     const SolidAngleCache* c =
         sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
     if (!c) return light_pdf(light, sampler, x, n, w);
