@@ -12,8 +12,8 @@ grid over [−2, 2]² at 1 m of point lights or of 5 cm area lights facing down
 Per scene and renderer, the operator's time is fitted as t0 + k·spp from two
 bakes (Cycles: 2 and 32 spp; omis: 4 and 64 samples per texel, the effect
 plan's techniques, balance heuristic); k / texels is the time per
-texel-sample. Cycles' Diffuse bake, DIRECT only, margin 0 (see
-bench/bench_cycles.py).
+texel-sample. Cycles' Diffuse bake, DIRECT only, margin 0; omis through the
+add-on's BakeJob (both timed as in bench/bench_cycles.py).
 """
 
 import argparse
@@ -26,9 +26,20 @@ import bpy
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
-sys.path.insert(0, os.path.join(ROOT, "bench"))
 import omis_test_utils as U  # noqa: E402
-import bench_cycles as B  # noqa: E402
+
+from omis_bake.job import BakeJob  # noqa: E402
+from omis_bake.settings import settings_from  # noqa: E402
+
+
+def log(text=""):
+    print(text, flush=True)
+
+
+def script_args():
+    argv = sys.argv
+    rest = argv[argv.index("--") + 1:] if "--" in argv else []
+    return rest[1:] if rest[:1] == ["--"] else rest
 
 
 def floor_scene(size):
@@ -36,7 +47,7 @@ def floor_scene(size):
     img = U.make_image("bake", size)
     ob = U.grid_mesh("Floor", size=4.0, cuts=1)
     ob.data.materials.append(U.image_material("FloorMat", img))
-    return [ob], img
+    return [ob]
 
 
 def emission_material():
@@ -80,21 +91,30 @@ def per_sample(run, lo, hi):
     return max((t_hi - t_lo) / max(s_hi - s_lo, 1e-9), 1e-12)
 
 
-def cycles(objects, image):
+def cycles(objects):
     def run(spp):
-        return B.cycles_run(objects, image, spp, 7)[1], spp
+        return U.cycles_bake(objects, spp, 7), spp
     return run
 
 
-def omis(objects, image):
+def omis(objects):
+    """The add-on's whole bake (export, native bake, write-back), as bench_cycles.py."""
     def run(n):
-        _, wall, stats, _ = B.omis_run(objects, image, "balance", 7, samples=n)
-        return wall, stats["samples_per_texel"]
+        U.select_only(objects)
+        overrides = {"samples": int(n), "time_budget": 0.0, "margin": 0, "seed": 7,
+                     "use_noise_target": False, "technique_mode": 'AUTO', "use_clear": True,
+                     "use_optimal_mis": False, "heuristic": 'BALANCE'}
+        start = time.perf_counter()
+        job = BakeJob(bpy.context, objects, settings_from(bpy.context.scene.omis, overrides))
+        job.run()
+        stats = job.finish(bpy.context)
+        # Delta-only scenes draw no MIS samples: count the requested ones.
+        return time.perf_counter() - start, stats["samples_per_texel"] or n
     return run
 
 
 def main():
-    argv = B.script_args()
+    argv = script_args()
     parser = argparse.ArgumentParser()
     parser.add_argument("--families", default="sphere,point,area")
     parser.add_argument("--max-emitters", type=int, default=100000)
@@ -110,16 +130,16 @@ def main():
             for side in (1, 4, 16, 100):
                 scenes.append((f"{kind} lights", side * side, grid(kind, side)))
     texels = args.size * args.size
-    B.log(f"time per texel-sample (µs), {texels} texels; omis: balance, the plan's techniques")
-    B.log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}")
+    log(f"time per texel-sample (µs), {texels} texels; omis: balance, the plan's techniques")
+    log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}")
     for family, emitters, build in scenes:
         if emitters > args.max_emitters:
             continue
-        objects, image = floor_scene(args.size)
+        objects = floor_scene(args.size)
         build()
-        c = 1e6 * per_sample(cycles(objects, image), 2, 32) / texels
-        o = 1e6 * per_sample(omis(objects, image), 4, 64) / texels
-        B.log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x")
+        c = 1e6 * per_sample(cycles(objects), 2, 32) / texels
+        o = 1e6 * per_sample(omis(objects), 4, 64) / texels
+        log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x")
 
 
 if __name__ == "__main__":
