@@ -2,6 +2,8 @@
 // with many lights (SPEC §3, §5).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -259,4 +261,46 @@ TEST_CASE("the plan picks the light tree by default for many emitters", "[select
     REQUIRE(!techniques.empty());
     CHECK(techniques[0].name() == "tree/solid-angle");
     CHECK(parse_technique("tree/area")->selection == LightSelection::Tree);
+}
+
+TEST_CASE("the emitter shapes find every area light a direction crosses", "[selection]") {
+    // Rects, ellipses (both facing ways) and an emissive mesh around x: every
+    // light whose exact shape a random direction crosses must be among the
+    // candidates Embree returns (extra candidates are allowed: callers check).
+    Scene scene;
+    std::vector<Vec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    for (int i = 0; i < 12; ++i) {
+        const double a = 2 * kPi * i / 12;
+        const Vec3 c(2 * std::cos(a), 2 * std::sin(a), 0.3 * (i % 3) - 0.3);
+        const Vec3 u = Vec3(-std::sin(a), std::cos(a), 0) * 0.7, v(0, 0, 0.5 + 0.05 * i);
+        if (i % 2)
+            scene.add_light(make_rect_light(c, i % 4 == 1 ? u : v, i % 4 == 1 ? v : u,
+                                            Vec3(1, 1, 1), false, kPi));
+        else
+            scene.add_light(make_ellipse_light(c, u, v, Vec3(1, 1, 1), i % 4 == 0, kPi));
+        const std::uint32_t base = std::uint32_t(positions.size());
+        positions.insert(positions.end(), {c * 1.5, c * 1.5 + u, c * 1.5 + v});
+        triangles.push_back({base, base + 1, base + 2});
+    }
+    scene.add_mesh(positions, triangles, Vec3(1, 1, 1));
+    scene.commit();
+    const Vec3 x(0.1, -0.05, 0.02);
+    Pcg32 rng(13, 17);
+    int crossings = 0;
+    std::vector<std::uint32_t> along;
+    for (int i = 0; i < 20000; ++i) {
+        const double z = 2 * rng.next_double() - 1, phi = 2 * kPi * rng.next_double();
+        const double r = std::sqrt(std::max(0.0, 1 - z * z));
+        const Vec3 w(r * std::cos(phi), r * std::sin(phi), z);
+        along.clear();
+        scene.emitter_shapes().lights_along(x, w, along);
+        for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
+            if (!emitted_radiance(scene.lights()[l], x, w)) continue;
+            ++crossings;
+            INFO("light " << l << " direction " << w.x << "," << w.y << "," << w.z);
+            CHECK(std::find(along.begin(), along.end(), l) != along.end());
+        }
+    }
+    CHECK(crossings > 1000);  // the check saw many crossings
 }
