@@ -319,8 +319,10 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         double pdf = 0;
         const std::vector<std::uint32_t>& along = lights_along(x, w);
         for (std::uint32_t l : along) {
-            const double pmf = s->pmf(x, n, l, &memo_);
-            if (pmf > 0) pdf += pmf * this->pdf(l, t.sampler, x, n, w);
+            // The shape's density first: it is 0 for most extra candidates,
+            // and then the tree need not be walked.
+            const double shape = this->pdf(l, t.sampler, x, n, w);
+            if (shape > 0) pdf += s->pmf(x, n, l, &memo_) * shape;
         }
         counters.pdf_evaluations += along.size();
         return pdf;
