@@ -984,7 +984,7 @@ normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
           R"doc(E_direct/π per RGB channel at shading points of a committed scene (SPEC §3, §6).
 
 points, normals: (P, 3) float arrays (normals are normalised; not zero).
-techniques: list of names ("bsdf", "<uniform|power|unoccluded>/<area|solid-angle|parallel>")
+techniques: list of names ("bsdf", "<uniform|power|unoccluded|tree>/<area|solid-angle|parallel>")
 or one comma-separated string, with samples: one count per technique per round;
 techniques=None lets the effect plan choose both (samples must then be None).
 rounds: R; strategy: a MIS strategy name (see STRATEGIES); seed: results depend on

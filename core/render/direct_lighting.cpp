@@ -26,7 +26,29 @@ namespace {
 // depth of it is the emitter itself or a coplanar neighbour, not a blocker.
 constexpr double kEmitterDepthTolerance = 1e-4;
 
-// A light technique at one point: the lights it may pick and their CDF.
+// A triangle or rect smaller than this in solid angle (sr, estimated as area
+// over the squared distance to its centroid) is sampled by area for
+// `solid-angle`: the spherical polygon's setup would cost more than it saves,
+// and the two densities nearly agree there. A function of (x, light) only, so
+// pdf evaluation makes the same choice as sampling.
+constexpr double kTinySolidAngle = 1e-3;
+
+bool tiny_in_solid_angle(const Light& light, const Vec3& x) {
+    if (light.type == LightType::Triangle) {
+        const TriangleLight& t = light.triangle;
+        const Vec3 d = (t.p0 + t.p1 + t.p2) / 3.0 - x;
+        return t.area() < kTinySolidAngle * dot(d, d);
+    }
+    if (light.type == LightType::Rect) {
+        const RectLight& r = light.rect;
+        const Vec3 d = r.corner + (r.edge_u + r.edge_v) * 0.5 - x;
+        return r.area() < kTinySolidAngle * dot(d, d);
+    }
+    return false;
+}
+
+// A light technique at one point (`unoccluded`, exact per light): the lights
+// it may pick and their CDF.
 struct LightChoice {
     std::vector<std::uint32_t> lights;
     std::vector<double> probability, cdf;
@@ -46,7 +68,13 @@ struct PointLighting::Impl {
     };
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
-    void choose_lights(int k, const Vec3& x, const Vec3& n);
+    bool choose_lights(int k, const Vec3& x, const Vec3& n);
+    std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
+    // Every integrated light direction w from x may cross (a superset: area
+    // lights from the Embree shape scene, plus the few unshaped ones).
+    const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
+    void add_delta_lights(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
+                          const Vec3& n, const Vec3& ng, Vec3& total, Vec3& total_variance);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t mask, const std::vector<int>& active);
 
@@ -62,6 +90,8 @@ struct PointLighting::Impl {
     const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x);
     std::optional<LightSample> sample(std::uint32_t l, LightSampler sampler, const Vec3& x,
                                       const Vec3& n, double u1, double u2);
+    static std::optional<LightSample> sample_cached(const SolidAngleCache& c, double u1,
+                                                    double u2);
     double pdf(std::uint32_t l, LightSampler sampler, const Vec3& x, const Vec3& n,
                const Vec3& w);
     std::vector<SolidAngleCache> solid_angle_cache_;
@@ -76,6 +106,16 @@ struct PointLighting::Impl {
         Emitted emitted;
     };
     std::vector<Hit> hits_;
+    struct Along {
+        Vec3 x, w;
+        bool valid = false;
+        std::vector<std::uint32_t> lights;
+    } along_;
+    struct Drawn {
+        std::uint32_t light = ~0u;
+        Vec3 w;
+    } drawn_;  // the last light sample: its light surely lies along its direction
+    LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
 };
 
 const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
@@ -102,9 +142,20 @@ const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std
 std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, LightSampler sampler,
                                                        const Vec3& x, const Vec3& n, double u1,
                                                        double u2) {
+    const Light& light = p_.scene.lights()[l];
+    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
     const SolidAngleCache* c =
         sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
-    if (!c) return sample_light(p_.scene.lights()[l], sampler, x, n, u1, u2);
+    std::optional<LightSample> s;
+    if (!c) s = sample_light(light, sampler, x, n, u1, u2);
+    else s = sample_cached(*c, u1, u2);
+    if (s) drawn_ = {l, s->dir};
+    return s;
+}
+
+std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCache& cache,
+                                                              double u1, double u2) {
+    const SolidAngleCache* c = &cache;
     // The same draw as RectLight/TriangleLight::sample_solid_angle, from the cache.
     if (c->rect) {
         const DirSample s = c->rect->sample(u1, u2);
@@ -119,16 +170,30 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, LightSam
 
 double PointLighting::Impl::pdf(std::uint32_t l, LightSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w) {
+    const Light& light = p_.scene.lights()[l];
+    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
     const SolidAngleCache* c =
         sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
-    if (!c) return light_pdf(p_.scene.lights()[l], sampler, x, n, w);
+    if (!c) return light_pdf(light, sampler, x, n, w);
     if (c->rect) return c->rect->pdf(w);
     if (c->triangle) return c->triangle->pdf(w);
     return 0.0;
 }
 
-void PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
+// Whether technique k has a light to draw at (x, n). `tree` (and `uniform`,
+// `power` among many lights) draws from the context's selectors, which need
+// no per-point setup; otherwise a table over the lights that reach x is made
+// here (`unoccluded`: by their exact unoccluded irradiance). A technique
+// with no light to draw at x leaves the point's MIS system.
+bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     const Technique& t = p_.settings.techniques[k];
+    if (const LightSelector* s = p_.selector(t.selection)) {
+        if (s->empty() || !s->may_reach(x, n)) return false;
+        if (p_.integrated.size() > std::size_t(kManyIntegratedLights)) return true;
+        for (std::uint32_t l : p_.integrated)
+            if (sampler_applies(p_.scene.lights()[l], t.sampler, x, n)) return true;
+        return false;
+    }
     LightChoice& c = choices_[k];
     c.lights.clear();
     c.probability.clear();
@@ -157,6 +222,38 @@ void PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
         c.cdf.push_back(running);
     }
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
+    return !c.lights.empty();
+}
+
+std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
+                                                             const Vec3& n, double u) {
+    const Technique& t = p_.settings.techniques[k];
+    if (const LightSelector* s = p_.selector(t.selection)) return s->sample(x, n, u, &memo_);
+    const LightChoice& c = choices_[k];
+    const std::size_t i = std::min<std::size_t>(
+        std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1);
+    return SelectedLight{c.lights[i], c.probability[i]};
+}
+
+const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& x,
+                                                                    const Vec3& w) {
+    Along& a = along_;
+    if (a.valid && a.x.x == x.x && a.x.y == x.y && a.x.z == x.z && a.w.x == w.x &&
+        a.w.y == w.y && a.w.z == w.z)
+        return a.lights;
+    a.x = x;
+    a.w = w;
+    a.valid = true;
+    a.lights.clear();
+    p_.scene.emitter_shapes().lights_along(x, w, a.lights);
+    const auto& unshaped = p_.scene.unshaped_lights();
+    a.lights.insert(a.lights.end(), unshaped.begin(), unshaped.end());
+    // The light just sampled toward w lies along it, even where single
+    // precision might miss its (enlarged) shape.
+    if (drawn_.light != ~0u && drawn_.w.x == w.x && drawn_.w.y == w.y && drawn_.w.z == w.z &&
+        std::find(a.lights.begin(), a.lights.end(), drawn_.light) == a.lights.end())
+        a.lights.push_back(drawn_.light);
+    return a.lights;
 }
 
 PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, const Vec3& n,
@@ -165,7 +262,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     const double cos_theta = dot(n, w);
     if (!(cos_theta > 0)) return f;
     hits_.clear();
-    for (std::uint32_t l : p_.integrated) {
+    for (std::uint32_t l : lights_along(x, w)) {
         const auto e = emitted_radiance(p_.scene.lights()[l], x, w);
         if (e && luminance(e->radiance) > 0) hits_.push_back({l, *e});
     }
@@ -221,6 +318,19 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
 double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
+    if (const LightSelector* s = p_.selector(t.selection)) {
+        // Only lights along w have a density there.
+        double pdf = 0;
+        const std::vector<std::uint32_t>& along = lights_along(x, w);
+        for (std::uint32_t l : along) {
+            // The shape's density first: it is 0 for most extra candidates,
+            // and then the tree need not be walked.
+            const double shape = this->pdf(l, t.sampler, x, n, w);
+            if (shape > 0) pdf += s->pmf(x, n, l, &memo_) * shape;
+        }
+        counters.pdf_evaluations += along.size();
+        return pdf;
+    }
     const LightChoice& c = choices_[k];
     double pdf = 0;
     for (std::size_t i = 0; i < c.lights.size(); ++i)
@@ -244,27 +354,68 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     return it->second;
 }
 
+// Delta lights are not integrated: one shadow ray each when they are few; when
+// they are many (plan.sample_delta_lights), their sum is estimated by drawing
+// delta_samples lights per round from the light tree, each weighted by 1/pmf —
+// unbiased, as Cycles does — and the estimate's variance joins the point's.
+void PointLighting::Impl::add_delta_lights(std::uint64_t stream, int first_round, int rounds,
+                                           const Vec3& x, const Vec3& n, const Vec3& ng,
+                                           Vec3& total, Vec3& total_variance) {
+    const GeometryScene& geometry = p_.scene.geometry();
+    auto visible = [&](const Light& light, const DeltaIllumination& d) {
+        if (!light.cast_shadow || !p_.plan.shadow_rays) return true;
+        ++counters.rays;
+        return !geometry.occluded(offset_ray_origin(x, ng, d.direction), d.direction, 0,
+                                  d.distance);
+    };
+    // E/π for Lambert; other receivers scale it by their closure's ratio.
+    auto delta_factor = [&](const DeltaIllumination& d) {
+        return kInvPi * p_.settings.receiver.lambert_ratio(dot(n, d.direction));
+    };
+    if (!p_.plan.sample_delta_lights) {
+        for (std::uint32_t l : p_.delta) {
+            const Light& light = p_.scene.lights()[l];
+            const auto d = delta_illumination(light, x, n);
+            if (d && visible(light, *d)) total += d->irradiance * delta_factor(*d);
+        }
+        return;
+    }
+    // A stream of its own (the MIS draws keep theirs), continued across
+    // rounds like them: a randomly shifted golden-ratio sequence.
+    Pcg32 rng = point_stream(p_.settings.seed ^ 0xde17a5a3f1e5ull, stream);
+    const double shift = rng.next_double();
+    const int per_round = p_.plan.delta_samples;
+    const double count = double(per_round) * rounds;
+    Vec3 sum, sum2;
+    for (int r = first_round; r < first_round + rounds; ++r)
+        for (int j = 0; j < per_round; ++j) {
+            const double u = shift + double(r * per_round + j) * 0.6180339887498949;
+            const auto pick = p_.delta_selector.sample(x, n, u - std::floor(u), &delta_memo_);
+            if (!pick) continue;
+            const Light& light = p_.scene.lights()[pick->light];
+            const auto d = delta_illumination(light, x, n);
+            if (!d || !visible(light, *d)) continue;
+            const Vec3 v = d->irradiance * (delta_factor(*d) / pick->pmf);
+            sum += v;
+            sum2 += hadamard(v, v);
+        }
+    const Vec3 mean = sum / count;
+    total += mean;
+    if (count < 2) return;
+    auto variance = [&](double s2, double m) {
+        return std::max(0.0, s2 / count - m * m) / (count - 1);
+    };
+    total_variance += Vec3(variance(sum2.x, mean.x), variance(sum2.y, mean.y),
+                           variance(sum2.z, mean.z));
+}
+
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const Vec3& x, const Vec3& n, const Vec3& ng, double* value,
                                 double* variance) {
     Vec3 total, total_variance;
-    const GeometryScene& geometry = p_.scene.geometry();
     ++point_serial_;  // invalidates the per-point solid-angle cache
 
-    // Delta lights: one deterministic shadow ray each.
-    for (std::uint32_t l : p_.delta) {
-        const Light& light = p_.scene.lights()[l];
-        const auto d = delta_illumination(light, x, n);
-        if (!d) continue;
-        if (light.cast_shadow && p_.plan.shadow_rays) {
-            ++counters.rays;
-            if (geometry.occluded(offset_ray_origin(x, ng, d->direction), d->direction, 0,
-                                  d->distance))
-                continue;
-        }
-        total += d->irradiance * (kInvPi * p_.settings.receiver.lambert_ratio(
-                                               dot(n, d->direction)));
-    }
+    add_delta_lights(stream, first_round, rounds, x, n, ng, total, total_variance);
 
     // Which enabled techniques apply here: a light technique needs a light its
     // sampler can reach from this point.
@@ -273,8 +424,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
         if (!t.bsdf) {
-            choose_lights(k, x, n);
-            if (choices_[k].lights.empty()) continue;
+            if (!choose_lights(k, x, n)) continue;
             active_lights.push_back(k);
             light_mask |= std::uint64_t(1) << k;
         }
@@ -324,11 +474,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                         w = frame.to_world(sample_cosine_hemisphere(u1, u2));
                         ok = dot(w, n) > 0;
                     } else {
-                        const LightChoice& c = choices_[k];
-                        const std::size_t i = std::min<std::size_t>(
-                            std::upper_bound(c.cdf.begin(), c.cdf.end(), u0) - c.cdf.begin(),
-                            c.lights.size() - 1);
-                        const auto s = sample(c.lights[i], t.sampler, x, n, u1, u2);
+                        const auto light = pick_light(k, x, n, u0);
+                        const auto s = light ? sample(light->light, t.sampler, x, n, u1, u2)
+                                             : std::nullopt;
                         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
                         if (ok) w = s->dir;
                     }
@@ -403,6 +551,32 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         (light.is_delta() ? delta : integrated).push_back(l);
         power.push_back(light.power(scene.bounding_radius()));
     }
+    const double radius = scene.bounding_radius();
+    // Few lights: `uniform` and `power` keep their per-point tables over the
+    // lights that reach x (no draw wasted on the others).
+    const bool many = integrated.size() > std::size_t(kManyIntegratedLights);
+    for (int k : techniques) {
+        const Technique& t = settings.techniques[k];
+        if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
+        if (t.selection == LightSelection::Uniform && uniform_selector.empty())
+            uniform_selector = LightSelector(LightSelector::Kind::Uniform, scene.lights(), integrated, radius);
+        if (t.selection == LightSelection::Power && power_selector.empty())
+            power_selector = LightSelector(LightSelector::Kind::Power, scene.lights(), integrated, radius);
+        if (t.selection == LightSelection::Tree && tree_selector.empty())
+            tree_selector = LightSelector(LightSelector::Kind::Tree, scene.lights(), integrated, radius);
+    }
+    if (plan.sample_delta_lights)
+        delta_selector = LightSelector(LightSelector::Kind::Tree, scene.lights(), delta, radius);
+}
+
+const LightSelector* LightingContext::selector(LightSelection selection) const {
+    switch (selection) {
+        case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
+        case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
+        case LightSelection::Tree: return &tree_selector;
+        case LightSelection::Unoccluded: return nullptr;
+    }
+    return nullptr;
 }
 
 PointLighting::PointLighting(const LightingContext& context)

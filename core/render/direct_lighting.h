@@ -13,6 +13,7 @@
 #include "mis/strategy.h"
 #include "render/effect_plan.h"
 #include "render/receiver.h"
+#include "render/light_selection.h"
 #include "render/scene.h"
 
 namespace omis {
@@ -69,6 +70,11 @@ public:
     std::vector<int> techniques;  // enabled technique indices
     std::vector<std::uint32_t> integrated, delta;
     std::vector<double> power;  // per light, for `power` selection
+    // Selection of integrated lights for `uniform`, `power` and `tree`
+    // (built when a technique uses it), and of delta lights when the plan
+    // estimates their sum by drawing some (plan.sample_delta_lights).
+    LightSelector uniform_selector, power_selector, tree_selector, delta_selector;
+    const LightSelector* selector(LightSelection selection) const;
 };
 
 struct LightingCounters {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <sstream>
+#include <string>
 
 namespace omis {
 namespace {
@@ -53,6 +54,12 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         any_projectable = any_projectable || has_planar_projection(l);
     }
     plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
+    if (plan.delta_lights > kManyDeltaLights) {
+        plan.sample_delta_lights = true;
+        for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
+            plan.delta_samples += std::max(0, samples[k]);
+        plan.delta_samples = std::max(1, plan.delta_samples);
+    }
 
     for (std::size_t k = 0; k < techniques.size(); ++k) {
         const Technique& t = techniques[k];
@@ -67,6 +74,13 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         else if (!t.bsdf && t.sampler == LightSampler::Parallel && !any_projectable)
             why = "no light with a planar region to project";
         plan.enabled.push_back(why.empty());
+        if (why.empty() && !t.bsdf && t.selection == LightSelection::Tree)
+            why = "applies (light tree: O(log L) selection over " +
+                  std::to_string(plan.integrated_lights) + " light(s))";
+        else if (why.empty() && !t.bsdf && t.selection == LightSelection::Unoccluded &&
+                 plan.integrated_lights > kManyIntegratedLights)
+            why = "applies (exact per-light weights: cost grows with the " +
+                  std::to_string(plan.integrated_lights) + " lights; `tree` does not)";
         plan.why.push_back(why.empty() ? "applies (per point: lights above the horizon)" : why);
         plan.mis_system = plan.mis_system || why.empty();
     }
@@ -87,6 +101,9 @@ std::string EffectPlan::to_string() const {
       << " each, outside MIS): " << delta_lights << "\n  shadow rays: "
       << (shadow_rays ? "yes" : "no (nothing can occlude)") << "\n  MIS system per point: "
       << (mis_system ? "yes" : "no") << "\n";
+    if (sample_delta_lights)
+        s << "  delta lights: " << delta_lights << ", too many for a shadow ray each: "
+          << delta_samples << " per round drawn by a light tree (unbiased)\n";
     if (bsdf_invisible_lights)
         s << "  some lights are hidden from BSDF rays: light techniques integrate them alone\n";
     s << "  techniques:\n";
@@ -126,6 +143,11 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // combine far better than either alone.
         add("uniform/solid-angle", 1);
         add("uniform/area", 1);
+    } else if (integrated > kManyIntegratedLights) {
+        // Many emitters: the exact unoccluded weights would cost O(L) per
+        // point; the light tree picks by bounds in O(log L).
+        add("tree/solid-angle", 1);
+        add("power/solid-angle", 1);
     } else {
         // Several lights: the paper's "trained" technique (selection by
         // unoccluded contribution) with a power-selected partner that covers

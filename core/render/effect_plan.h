@@ -18,6 +18,10 @@ struct EffectPlan {
     int delta_lights = 0;        // one shadow ray each, outside MIS
     bool shadow_rays = false;    // some occluding geometry exists
     bool bsdf_invisible_lights = false;  // lights only light techniques may see
+    // Many delta lights: their sum is estimated by drawing delta_samples of
+    // them per round from a light tree instead of one shadow ray each.
+    bool sample_delta_lights = false;
+    int delta_samples = 0;
 
     // The requested techniques and whether the scene lets each apply at all.
     std::vector<Technique> techniques;
@@ -36,6 +40,12 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
 // scene (what a bake uses when the caller names none): solid angle + area for
 // one light; unoccluded + power selection, both solid angle, for several; plus
 // bsdf when there is a world or an emissive mesh.
+// Beyond these counts the plan stops looping over lights per point: delta
+// lights are drawn from a light tree, and the default light technique selects
+// by the tree instead of by exact unoccluded irradiance (bench_emitters).
+constexpr int kManyDeltaLights = 64;
+constexpr int kManyIntegratedLights = 64;
+
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
                         std::vector<int>& samples);
 

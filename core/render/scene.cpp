@@ -93,7 +93,37 @@ void Scene::commit() {
         light.mesh_triangle = t.triangle;
         lights_.push_back(light);
     }
+    build_emitter_shapes();
     committed_ = true;
+}
+
+void Scene::build_emitter_shapes() {
+    for (std::uint32_t id = 0; id < lights_.size(); ++id) {
+        const Light& l = lights_[id];
+        if (l.is_delta()) continue;
+        switch (l.type) {
+            case LightType::Rect: {
+                const RectLight& r = l.rect;
+                const Vec3 far = r.corner + r.edge_u + r.edge_v;
+                emitter_shapes_.add_triangle(id, r.corner, r.corner + r.edge_u, far);
+                emitter_shapes_.add_triangle(id, r.corner, far, r.corner + r.edge_v);
+                break;
+            }
+            case LightType::Ellipse: {  // its bounding parallelogram
+                const EllipseLight& e = l.ellipse;
+                const Vec3 a = e.center - e.axis_a - e.axis_b, b = e.center + e.axis_a - e.axis_b,
+                           c = e.center + e.axis_a + e.axis_b, d = e.center - e.axis_a + e.axis_b;
+                emitter_shapes_.add_triangle(id, a, b, c);
+                emitter_shapes_.add_triangle(id, a, c, d);
+                break;
+            }
+            case LightType::Triangle:
+                emitter_shapes_.add_triangle(id, l.triangle.p0, l.triangle.p1, l.triangle.p2);
+                break;
+            default: unshaped_lights_.push_back(id);
+        }
+    }
+    emitter_shapes_.commit();
 }
 
 }  // namespace omis

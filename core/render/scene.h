@@ -7,6 +7,7 @@
 
 #include "lights/light.h"
 #include "render/receiver.h"
+#include "scene/emitter_shapes.h"
 #include "scene/geometry_scene.h"
 
 namespace omis {
@@ -40,13 +41,23 @@ public:
     // Every light after commit: analytic ones first, then emissive triangles.
     const std::vector<Light>& lights() const { return lights_; }
     std::size_t num_analytic_lights() const { return analytic_lights_; }
+    // The shapes of every area light (rect, ellipse, emissive triangle) in
+    // Embree, for finding the lights a direction crosses (after commit).
+    const EmitterShapes& emitter_shapes() const { return emitter_shapes_; }
+    // The other non-delta lights (sphere lights, sun with an angle, world):
+    // few, and looped over per direction.
+    const std::vector<std::uint32_t>& unshaped_lights() const { return unshaped_lights_; }
     // Radius of a sphere around the origin holding every mesh and local light.
     double bounding_radius() const { return bounding_radius_; }
 
 private:
     void require_uncommitted_light(std::uint32_t light) const;
 
+    void build_emitter_shapes();
+
     GeometryScene geometry_;
+    EmitterShapes emitter_shapes_;
+    std::vector<std::uint32_t> unshaped_lights_;
     std::vector<Light> lights_;
     std::vector<Receiver> receivers_;  // per mesh; shorter: Lambert for the rest
     std::size_t analytic_lights_ = 0;

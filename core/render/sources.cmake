@@ -5,5 +5,6 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/effect_plan.cpp
     ${CMAKE_CURRENT_LIST_DIR}/direct_lighting.cpp
     ${CMAKE_CURRENT_LIST_DIR}/receiver.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/light_selection.cpp
 )
 target_link_libraries(omis_core PUBLIC TBB::tbb)

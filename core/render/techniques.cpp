@@ -6,6 +6,7 @@ std::string Technique::name() const {
     if (bsdf) return "bsdf";
     const char* sel = selection == LightSelection::Uniform ? "uniform"
                       : selection == LightSelection::Power ? "power"
+                      : selection == LightSelection::Tree  ? "tree"
                                                            : "unoccluded";
     return std::string(sel) + "/" + light_sampler_name(sampler);
 }
@@ -19,6 +20,7 @@ std::optional<Technique> parse_technique(std::string_view name) {
     if (sel == "uniform") t.selection = LightSelection::Uniform;
     else if (sel == "power") t.selection = LightSelection::Power;
     else if (sel == "unoccluded") t.selection = LightSelection::Unoccluded;
+    else if (sel == "tree") t.selection = LightSelection::Tree;
     else return std::nullopt;
     if (smp == "area") t.sampler = LightSampler::Area;
     else if (smp == "solid-angle") t.sampler = LightSampler::SolidAngle;

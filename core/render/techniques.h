@@ -9,7 +9,10 @@
 
 namespace omis {
 
-enum class LightSelection { Uniform, Power, Unoccluded };
+// Tree: the light hierarchy's estimate of each light's contribution
+// (render/light_selection.h) — cheap at any light count, unlike Unoccluded's
+// exact per-light irradiance.
+enum class LightSelection { Uniform, Power, Unoccluded, Tree };
 
 struct Technique {
     bool bsdf = false;  // cosine-weighted hemisphere
@@ -22,7 +25,7 @@ struct Technique {
     }
 };
 
-// "bsdf", "uniform/area", "power/solid-angle", "unoccluded/parallel",
+// "bsdf", "uniform/area", "power/solid-angle", "unoccluded/parallel", "tree/solid-angle",
 // "uniform/projected-solid-angle", ...
 std::optional<Technique> parse_technique(std::string_view name);
 

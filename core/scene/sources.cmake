@@ -3,5 +3,6 @@ find_package(embree 3 CONFIG REQUIRED)
 target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/device.cpp
     ${CMAKE_CURRENT_LIST_DIR}/geometry_scene.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/emitter_shapes.cpp
 )
 target_link_libraries(omis_core PUBLIC embree)

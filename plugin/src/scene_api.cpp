@@ -98,7 +98,7 @@ TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const cha
         if (!technique)
             throw std::invalid_argument(
                 "techniques: unknown technique '" + name +
-                "' (bsdf, or <uniform|power|unoccluded>/<area|solid-angle|parallel>)");
+                "' (bsdf, or <uniform|power|unoccluded|tree>/<area|solid-angle|parallel>)");
         choice.techniques.push_back(*technique);
         if (end == list.size()) break;
         begin = end + 1;

@@ -1,0 +1,191 @@
+// Emitter-scaling benchmark (issue 8): time per texel-sample as the number of
+// emitters grows — an emissive UV sphere from 16 to ~100k triangles, grids of
+// 1 to 10k point lights and of 1 to 10k small area lights — each over a floor
+// of 32×32 receivers, with the effect plan's default techniques (which switch
+// to the light tree and to drawn delta lights past 64 emitters).
+//
+// One thread (the machine is shared; a per-sample cost is what is compared),
+// every scene timed in the same run, the fastest of 3 repetitions of shading
+// every receiver; the one-off setup (light tree, tables) is shown apart. The last
+// column is the growth against the smallest scene of the same family: the
+// target is at most 2× from 16 to 100k emitters.
+//
+// Flags: --quick (fewer receivers), --only sphere|point|area.
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "render/direct_lighting.h"
+
+using namespace omis;
+
+namespace {
+
+void add_floor(Scene& scene) {
+    scene.add_mesh(std::vector<Vec3>{{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}},
+                   {{0, 1, 2}, {0, 2, 3}});
+}
+
+// A UV sphere of radius 0.5 at height 1.5 with `stacks`×`slices` quads (caps
+// as triangles): 2·slices·(stacks − 1) triangles, emitting 1 W/(m² sr).
+void add_emissive_sphere(Scene& scene, int stacks, int slices) {
+    std::vector<Vec3> p;
+    std::vector<std::array<std::uint32_t, 3>> t;
+    const Vec3 centre(0, 0, 1.5);
+    p.push_back(centre + Vec3(0, 0, 0.5));
+    for (int i = 1; i < stacks; ++i)
+        for (int j = 0; j < slices; ++j) {
+            const double theta = kPi * i / stacks, phi = 2 * kPi * j / slices;
+            p.push_back(centre + 0.5 * Vec3(std::sin(theta) * std::cos(phi),
+                                            std::sin(theta) * std::sin(phi), std::cos(theta)));
+        }
+    p.push_back(centre - Vec3(0, 0, 0.5));
+    const auto ring = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * slices + (j % slices)); };
+    const std::uint32_t bottom = std::uint32_t(p.size() - 1);
+    for (int j = 0; j < slices; ++j) {
+        t.push_back({0, ring(1, j), ring(1, j + 1)});
+        t.push_back({bottom, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
+        for (int i = 1; i + 1 < stacks; ++i) {
+            t.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            t.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+    }
+    scene.add_mesh(p, t, Vec3(1, 1, 1));
+}
+
+// side × side lights over [−2, 2]² at height 1, total power independent of
+// the count.
+void add_point_grid(Scene& scene, int side) {
+    for (int j = 0; j < side; ++j)
+        for (int i = 0; i < side; ++i) {
+            const Vec3 p(side == 1 ? 0 : -2 + 4.0 * i / (side - 1),
+                         side == 1 ? 0 : -2 + 4.0 * j / (side - 1), 1);
+            scene.add_light(make_point_light(p, Vec3(1, 1, 1) * (10.0 / (side * side)), 0));
+        }
+}
+
+void add_area_grid(Scene& scene, int side) {
+    const double s = 0.05;
+    for (int j = 0; j < side; ++j)
+        for (int i = 0; i < side; ++i) {
+            const Vec3 c(side == 1 ? 0 : -2 + 4.0 * i / (side - 1),
+                         side == 1 ? 0 : -2 + 4.0 * j / (side - 1), 1);
+            // Edges (0,s,0)×(s,0,0): emits toward −z, the floor.
+            scene.add_light(make_rect_light(c - Vec3(s / 2, s / 2, 0), Vec3(0, s, 0),
+                                            Vec3(s, 0, 0), Vec3(1, 1, 1) * (400.0 / (side * side)),
+                                            false, kPi));
+        }
+}
+
+struct Row {
+    std::string family;
+    int emitters;
+    std::string techniques;
+    double us_per_sample;
+    double setup_ms;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+Row time_scene(const std::string& family, int emitters,
+               const std::function<void(Scene&)>& build, int grid) {
+    Scene scene;
+    add_floor(scene);
+    build(scene);
+    scene.commit();
+    DirectLightingSettings s;
+    default_techniques(scene, s.techniques, s.samples);
+    s.rounds = 4;
+    std::vector<double> points, normals;
+    for (int j = 0; j < grid; ++j)
+        for (int i = 0; i < grid; ++i) {
+            points.insert(points.end(), {-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0});
+            normals.insert(normals.end(), {0.0, 0.0, 1.0});
+        }
+    const std::size_t count = points.size() / 3;
+    // The per-sample cost: one context (the light tree is built here, once
+    // per bake), then shading alone, fastest of 3 repetitions.
+    const auto t0 = std::chrono::steady_clock::now();
+    const LightingContext context(scene, s);
+    const double setup = seconds_since(t0);
+    PointLighting shader(context);
+    double best = 1e300, value[3], variance[3];
+    for (int rep = 0; rep < 3; ++rep) {
+        const auto start = std::chrono::steady_clock::now();
+        for (std::size_t i = 0; i < count; ++i) {
+            const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
+            const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
+            shader.shade(i, 0, s.rounds, x, n, n, value, variance);
+        }
+        best = std::min(best, seconds_since(start));
+    }
+    // Texel-samples per point: the MIS samples; in delta-only scenes, one per
+    // round (a round draws one delta light, or loops over few).
+    int per_point = 0;
+    for (int n : s.samples) per_point += n * s.rounds;
+    if (per_point == 0) per_point = s.rounds;
+    const double texel_samples = double(count) * per_point;
+    std::string names;
+    for (const Technique& t : s.techniques) names += (names.empty() ? "" : "+") + t.name();
+    if (names.empty()) names = "(delta only)";
+    return {family, emitters, names, 1e6 * best / texel_samples, 1e3 * setup};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    bool quick = false;
+    std::string only;  // --only FAMILY: time one family (for profiling)
+    for (int i = 1; i < argc; ++i) {
+        if (std::strcmp(argv[i], "--quick") == 0) quick = true;
+        else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
+        else {
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area]\n", argv[0]);
+            return 2;
+        }
+    }
+    const auto wanted = [&](const char* family) { return only.empty() || only == family; };
+    const int grid = quick ? 12 : 32;
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+
+    std::vector<Row> rows;
+    const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
+    if (wanted("sphere"))
+        for (auto [stacks, slices] : spheres)
+            rows.push_back(time_scene("emissive sphere", 2 * slices * (stacks - 1),
+                                      [&](Scene& s) { add_emissive_sphere(s, stacks, slices); },
+                                      grid));
+    if (wanted("point"))
+        for (int side : {1, 4, 16, 100})
+            rows.push_back(time_scene("point lights", side * side,
+                                      [&](Scene& s) { add_point_grid(s, side); }, grid));
+    if (wanted("area"))
+        for (int side : {1, 4, 16, 100})
+            rows.push_back(time_scene("area lights", side * side,
+                                      [&](Scene& s) { add_area_grid(s, side); }, grid));
+
+    std::printf("time per texel-sample, one thread, %d receivers, 4 rounds of the default techniques\n",
+                grid * grid);
+    std::printf("%-16s %9s %12s %8s %9s  %s\n", "scene", "emitters", "us/sample", "growth",
+                "setup ms", "techniques");
+    double base = 0;
+    std::string family;
+    for (const Row& r : rows) {
+        if (r.family != family) {
+            family = r.family;
+            base = r.us_per_sample;
+        }
+        std::printf("%-16s %9d %12.3f %7.2fx %9.2f  %s\n", r.family.c_str(), r.emitters,
+                    r.us_per_sample, r.us_per_sample / base, r.setup_ms, r.techniques.c_str());
+    }
+    return 0;
+}

@@ -1,0 +1,146 @@
+"""Emitter scaling against Cycles' own bake: time per texel-sample of omis and of
+Cycles on the same scenes, in one run.
+
+    bash scripts/blender_run.sh bench/bench_emitters_cycles.py [--families sphere,point,area]
+        [--max-emitters N] [--size N]
+
+Scenes (as bench/bench_emitters.cpp): a floor of 4 m with a size² float image,
+and an emissive UV sphere (radius 0.5 m at 1.5 m, 16 to ~100k triangles), or a
+grid over [−2, 2]² at 1 m of point lights or of 5 cm area lights facing down
+(1 to 10k), total power fixed.
+
+Per scene and renderer, the operator's time is fitted as t0 + k·spp from two
+bakes (Cycles: 2 and 32 spp; omis: 4 and 64 samples per texel, the effect
+plan's techniques, balance heuristic); k / texels is the time per
+texel-sample. Cycles' Diffuse bake, DIRECT only, margin 0; omis through the
+add-on's BakeJob (both timed as in bench/bench_cycles.py).
+"""
+
+import argparse
+import math
+import os
+import sys
+import time
+
+import bpy
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
+import omis_test_utils as U  # noqa: E402
+
+from omis_bake.job import BakeJob  # noqa: E402
+from omis_bake.settings import settings_from  # noqa: E402
+
+
+def log(text=""):
+    print(text, flush=True)
+
+
+def script_args():
+    argv = sys.argv
+    rest = argv[argv.index("--") + 1:] if "--" in argv else []
+    return rest[1:] if rest[:1] == ["--"] else rest
+
+
+def floor_scene(size):
+    U.reset_scene()
+    img = U.make_image("bake", size)
+    ob = U.grid_mesh("Floor", size=4.0, cuts=1)
+    ob.data.materials.append(U.image_material("FloorMat", img))
+    return [ob]
+
+
+def emission_material():
+    mat = bpy.data.materials.new("Glow")
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    em = nodes.new("ShaderNodeEmission")
+    em.inputs["Strength"].default_value = 1.0
+    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return mat
+
+
+def sphere(stacks, slices):
+    def build():
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=slices, ring_count=stacks, radius=0.5,
+                                             location=(0, 0, 1.5))
+        bpy.context.active_object.data.materials.append(emission_material())
+    return build
+
+
+def grid(kind, side):
+    def build():
+        for j in range(side):
+            for i in range(side):
+                x = 0.0 if side == 1 else -2 + 4.0 * i / (side - 1)
+                y = 0.0 if side == 1 else -2 + 4.0 * j / (side - 1)
+                if kind == "point":
+                    U.add_light('POINT', f"p{i}_{j}", energy=500.0 / side ** 2,
+                                location=(x, y, 1.0), shadow_soft_size=0.0)
+                else:
+                    U.add_light('AREA', f"a{i}_{j}", energy=500.0 / side ** 2,
+                                location=(x, y, 1.0), shape='SQUARE', size=0.05)
+    return build
+
+
+def per_sample(run, lo, hi):
+    """Seconds per texel-sample from two runs; run(n) -> (seconds, samples per texel)."""
+    run(1)  # warm-up
+    (t_lo, s_lo), (t_hi, s_hi) = run(lo), run(hi)
+    return max((t_hi - t_lo) / max(s_hi - s_lo, 1e-9), 1e-12)
+
+
+def cycles(objects):
+    def run(spp):
+        return U.cycles_bake(objects, spp, 7), spp
+    return run
+
+
+def omis(objects):
+    """The add-on's whole bake (export, native bake, write-back), as bench_cycles.py."""
+    def run(n):
+        U.select_only(objects)
+        overrides = {"samples": int(n), "time_budget": 0.0, "margin": 0, "seed": 7,
+                     "use_noise_target": False, "technique_mode": 'AUTO', "use_clear": True,
+                     "use_optimal_mis": False, "heuristic": 'BALANCE'}
+        start = time.perf_counter()
+        job = BakeJob(bpy.context, objects, settings_from(bpy.context.scene.omis, overrides))
+        job.run()
+        stats = job.finish(bpy.context)
+        # Delta-only scenes draw no MIS samples: count the requested ones.
+        return time.perf_counter() - start, stats["samples_per_texel"] or n
+    return run
+
+
+def main():
+    argv = script_args()
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--families", default="sphere,point,area")
+    parser.add_argument("--max-emitters", type=int, default=100000)
+    parser.add_argument("--size", type=int, default=64)
+    args = parser.parse_args(argv)
+    families = args.families.split(",")
+    scenes = []
+    if "sphere" in families:
+        for stacks, slices in ((2, 8), (8, 16), (20, 40), (64, 128), (158, 316)):
+            scenes.append(("emissive sphere", 2 * slices * (stacks - 1), sphere(stacks, slices)))
+    for kind in ("point", "area"):
+        if kind in families:
+            for side in (1, 4, 16, 100):
+                scenes.append((f"{kind} lights", side * side, grid(kind, side)))
+    texels = args.size * args.size
+    log(f"time per texel-sample (µs), {texels} texels; omis: balance, the plan's techniques")
+    log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}")
+    for family, emitters, build in scenes:
+        if emitters > args.max_emitters:
+            continue
+        objects = floor_scene(args.size)
+        build()
+        c = 1e6 * per_sample(cycles(objects), 2, 32) / texels
+        o = 1e6 * per_sample(omis(objects), 4, 64) / texels
+        log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,399 @@
+#include "render/light_selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace omis {
+namespace {
+
+// The cone that holds both cones (pbrt-v4's DirectionCone Union): axis a.axis
+// rotated toward b.axis so that the new half-angle just covers both.
+void merge_cones(LightSelector::Bounds& a, const LightSelector::Bounds& b) {
+    const double theta_a = std::acos(std::clamp(a.cos_theta_o, -1.0, 1.0));
+    const double theta_b = std::acos(std::clamp(b.cos_theta_o, -1.0, 1.0));
+    const double theta_d = angle_between(a.axis, b.axis);
+    if (std::min(theta_d + theta_b, kPi) <= theta_a) return;
+    if (std::min(theta_d + theta_a, kPi) <= theta_b) {
+        a.axis = b.axis;
+        a.cos_theta_o = b.cos_theta_o;
+        return;
+    }
+    const double theta_o = 0.5 * (theta_a + theta_d + theta_b);
+    const Vec3 rotation_axis = cross(a.axis, b.axis);
+    if (theta_o >= kPi || length(rotation_axis) == 0) {
+        a.cos_theta_o = -1;  // every direction
+        return;
+    }
+    // Rodrigues: rotate a.axis by theta_o − theta_a about the unit rotation axis.
+    const Vec3 k = normalize(rotation_axis);
+    const double r = theta_o - theta_a, c = std::cos(r), s = std::sin(r);
+    a.axis = normalize(a.axis * c + cross(k, a.axis) * s + k * (dot(k, a.axis) * (1 - c)));
+    a.cos_theta_o = std::cos(theta_o);
+}
+
+LightSelector::Bounds merge(LightSelector::Bounds a, const LightSelector::Bounds& b) {
+    if (!(b.power > 0)) return a;
+    if (!(a.power > 0)) return b;
+    a.lo = {std::min(a.lo.x, b.lo.x), std::min(a.lo.y, b.lo.y), std::min(a.lo.z, b.lo.z)};
+    a.hi = {std::max(a.hi.x, b.hi.x), std::max(a.hi.y, b.hi.y), std::max(a.hi.z, b.hi.z)};
+    a.power += b.power;
+    merge_cones(a, b);
+    a.cos_theta_e = std::min(a.cos_theta_e, b.cos_theta_e);
+    a.two_sided = a.two_sided || b.two_sided;
+    return a;
+}
+
+// cos(max(0, α − β)) from the cosines of α, β ∈ [0, π].
+double cos_subtract_clamped(double cos_a, double cos_b) {
+    if (cos_a >= cos_b) return 1.0;
+    const double sin_a = std::sqrt(std::max(0.0, 1 - cos_a * cos_a));
+    const double sin_b = std::sqrt(std::max(0.0, 1 - cos_b * cos_b));
+    return cos_a * cos_b + sin_a * sin_b;
+}
+
+LightSelector::Bounds box_of(std::initializer_list<Vec3> points) {
+    LightSelector::Bounds b;
+    b.lo = b.hi = *points.begin();
+    for (const Vec3& p : points) {
+        b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
+        b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+    }
+    return b;
+}
+
+}  // namespace
+
+// pbrt-v4's LightBounds::Importance: power over squared distance, times the
+// cosine bounds at the emitter (θ' = θw − θo − θb must stay within θe) and at
+// the receiver (θi − θb below the horizon gives nothing). θb bounds the angle
+// the box subtends from x, so every light in the box gets at most this.
+void LightSelector::Bounds::finish() {
+    centre = (lo + hi) * 0.5;
+    radius2 = 0.25 * dot(hi - lo, hi - lo);
+    sin_theta_o = std::sqrt(std::max(0.0, 1 - cos_theta_o * cos_theta_o));
+}
+
+namespace {
+
+double importance_of(const Vec3& centre, double radius2, double power, const Vec3& axis,
+                     double cos_theta_o, double sin_theta_o, double cos_theta_e,
+                     bool two_sided, const Vec3& x, const Vec3& n) {
+    if (!(power > 0)) return 0;
+    const Vec3 d = x - centre;
+    const double dist2 = dot(d, d);
+    if (dist2 <= radius2) return power / std::max(radius2, 1e-300);  // x among the lights
+
+    const Vec3 wi = d / std::sqrt(dist2);  // from the lights toward x
+    double cos_w = dot(axis, wi);
+    if (two_sided) cos_w = std::abs(cos_w);
+    const double cos_b = std::sqrt(std::max(0.0, 1 - radius2 / dist2));
+    double cos_x = 1;  // cos(max(0, θw − θo))
+    if (cos_w < cos_theta_o) {
+        const double sin_w = std::sqrt(std::max(0.0, 1 - cos_w * cos_w));
+        cos_x = cos_w * cos_theta_o + sin_w * sin_theta_o;
+    }
+    const double cos_p = cos_subtract_clamped(cos_x, cos_b);
+    // A small allowance keeps lights exactly at a bound's edge sampleable.
+    if (cos_p < cos_theta_e - 1e-9) return 0;
+    const double cos_i = cos_subtract_clamped(-dot(n, wi), cos_b);
+    if (cos_i < -1e-9) return 0;
+    return power * std::max(cos_p, 1e-9) * std::max(cos_i, 1e-9) / std::max(dist2, radius2);
+}
+
+float round_down(double v) {
+    float f = float(v);
+    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+}
+float round_up(double v) {
+    float f = float(v);
+    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+}
+
+}  // namespace
+
+double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n) const {
+    return importance_of(centre, radius2, power, axis, cos_theta_o, sin_theta_o, cos_theta_e,
+                         two_sided, x, n);
+}
+
+LightSelector::PackedBounds::PackedBounds(const Bounds& b) {
+    // The rounded centre moves by up to `shift`: the radius grows by as much.
+    double shift2 = 0;
+    for (int i = 0; i < 3; ++i) {
+        centre[i] = float(b.centre[i]);
+        shift2 += (b.centre[i] - centre[i]) * (b.centre[i] - centre[i]);
+    }
+    radius = round_up(std::sqrt(b.radius2) + std::sqrt(shift2));
+    power = b.power > 0 ? std::max(float(b.power), 1e-30f) : 0.0f;
+    for (int i = 0; i < 3; ++i) axis[i] = float(b.axis[i]);
+    // The rounded axis is off by ~1e-7 rad: widen both cones by 1e-6 rad.
+    const double widen = 1e-6, theta_o = std::acos(std::clamp(b.cos_theta_o, -1.0, 1.0));
+    cos_theta_o = round_down(std::cos(std::min(kPi, theta_o + widen)));
+    // cos rounded down, sin up: cos(θw − θo) only grows.
+    sin_theta_o = round_up(std::sin(std::min(kPi, theta_o + widen)));
+    const double theta_e = std::acos(std::clamp(b.cos_theta_e, -1.0, 1.0));
+    cos_theta_e = round_down(std::cos(std::min(kPi, theta_e + widen)));
+    two_sided = b.two_sided;
+}
+
+double LightSelector::PackedBounds::importance(const Vec3& x, const Vec3& n) const {
+    const double r = radius;
+    return importance_of(Vec3(centre[0], centre[1], centre[2]), r * r, power,
+                         Vec3(axis[0], axis[1], axis[2]), cos_theta_o, sin_theta_o,
+                         cos_theta_e, two_sided, x, n);
+}
+
+std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
+                                                              double scene_radius) {
+    Bounds b;
+    switch (l.type) {
+        case LightType::Rect: {
+            const RectLight& r = l.rect;
+            b = box_of({r.corner, r.corner + r.edge_u, r.corner + r.edge_v,
+                        r.corner + r.edge_u + r.edge_v});
+            b.axis = normalize(cross(r.edge_u, r.edge_v));
+            break;
+        }
+        case LightType::Ellipse: {
+            const EllipseLight& e = l.ellipse;
+            b = box_of({e.center + e.axis_a + e.axis_b, e.center + e.axis_a - e.axis_b,
+                        e.center - e.axis_a + e.axis_b, e.center - e.axis_a - e.axis_b});
+            b.axis = normalize(cross(e.axis_a, e.axis_b));
+            break;
+        }
+        case LightType::Triangle: {
+            const TriangleLight& t = l.triangle;
+            b = box_of({t.p0, t.p1, t.p2});
+            b.axis = normalize(cross(t.p1 - t.p0, t.p2 - t.p0));
+            break;
+        }
+        case LightType::Point:
+        case LightType::Spot: {
+            const Vec3 r(l.radius, l.radius, l.radius);
+            b = box_of({l.position - r, l.position + r});
+            b.axis = l.type == LightType::Spot ? l.spot_axis : Vec3(0, 0, 1);
+            b.cos_theta_o = l.type == LightType::Spot ? l.spot_cos_half : -1.0;
+            // A sphere light is a disk facing the receiver: it leaves up to 90°
+            // off the direction to x; a delta light only along it.
+            b.cos_theta_e = l.radius > 0 ? 0.0 : 1.0;
+            b.power = l.power(scene_radius);
+            b.finish();
+            return b;
+        }
+        case LightType::Sun:
+        case LightType::World: return std::nullopt;
+    }
+    // Planar lights: normal cone of half-angle 0, leaving up to 90° off it, or
+    // up to half the spread (Blender's spread gives nothing beyond s/2).
+    b.cos_theta_o = 1;
+    b.cos_theta_e = l.spread < kPi ? std::cos(0.5 * l.spread) : 0.0;
+    b.two_sided = l.two_sided;
+    b.power = l.power(scene_radius);
+    b.finish();
+    return b;
+}
+
+LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
+                             const std::vector<std::uint32_t>& ids, double scene_radius)
+    : kind_(kind), ids_(ids), slot_(lights.size(), -1) {
+    for (std::size_t i = 0; i < ids_.size(); ++i) {
+        if (ids_[i] >= lights.size() || slot_[ids_[i]] >= 0)
+            throw std::invalid_argument("ids: light " + std::to_string(ids_[i]) +
+                                        " is out of range or repeated");
+        slot_[ids_[i]] = std::int64_t(i);
+    }
+    if (kind_ == Kind::Power) {
+        double largest = 0;
+        for (std::uint32_t id : ids_) {
+            probability_.push_back(lights[id].power(scene_radius));
+            largest = std::max(largest, probability_.back());
+        }
+        // A light whose power rounds to zero keeps a tiny share, so every
+        // direction a light covers stays sampleable.
+        double total = 0;
+        for (double& w : probability_) {
+            if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
+            total += w;
+        }
+        double running = 0;
+        for (double& w : probability_) {
+            w /= total;
+            running += w;
+            cdf_.push_back(running);
+        }
+        if (!cdf_.empty()) cdf_.back() = 1.0;
+    }
+    if (kind_ == Kind::Tree) {
+        std::vector<Entry> entries;
+        for (std::uint32_t id : ids_) {
+            const auto b = bounds_of(lights[id], scene_radius);
+            if (!b) unbounded_.push_back(id);
+            else if (b->power > 0) entries.push_back({*b, id});
+            // Lights of zero power add nothing and are never drawn.
+        }
+        trail_.assign(ids_.size(), 0);
+        depth_.assign(ids_.size(), 0);
+        if (!entries.empty()) build(entries, 0, entries.size(), 0, 0);
+        build_bounds_ = {};
+    }
+}
+
+// Depth first, the first child right after its parent. Splits at the median
+// centroid along the widest axis of the centroids: a balanced tree of depth
+// ⌈log2 L⌉; the triangles of one mesh stay together in their own subtrees.
+std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begin,
+                                   std::size_t end, std::uint64_t trail, int depth) {
+    if (depth >= 64) throw std::length_error("light tree: deeper than 64 levels");
+    const std::uint32_t index = std::uint32_t(nodes_.size());
+    nodes_.emplace_back();
+    build_bounds_.emplace_back();
+    if (end - begin == 1) {
+        build_bounds_[index] = entries[begin].bounds;
+        nodes_[index].bounds = PackedBounds(entries[begin].bounds);
+        nodes_[index].light = entries[begin].light;
+        const std::int64_t slot = slot_[entries[begin].light];
+        trail_[slot] = trail;
+        depth_[slot] = std::uint8_t(depth);
+        return index;
+    }
+    Vec3 lo = (entries[begin].bounds.lo + entries[begin].bounds.hi) * 0.5, hi = lo;
+    for (std::size_t i = begin; i < end; ++i) {
+        const Vec3 c = (entries[i].bounds.lo + entries[i].bounds.hi) * 0.5;
+        lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
+        hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+    }
+    const Vec3 extent = hi - lo;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    const std::size_t mid = begin + (end - begin) / 2;
+    std::nth_element(entries.begin() + begin, entries.begin() + mid, entries.begin() + end,
+                     [axis](const Entry& a, const Entry& b) {
+                         return a.bounds.lo[axis] + a.bounds.hi[axis] <
+                                b.bounds.lo[axis] + b.bounds.hi[axis];
+                     });
+    const std::uint32_t first = build(entries, begin, mid, trail, depth + 1);
+    const std::uint32_t second =
+        build(entries, mid, end, trail | (std::uint64_t(1) << depth), depth + 1);
+    nodes_[index].second_child = second;
+    Bounds& b = build_bounds_[index];
+    b = merge(build_bounds_[first], build_bounds_[second]);
+    b.finish();
+    nodes_[index].bounds = PackedBounds(b);
+    return index;
+}
+
+double LightSelector::first_child_probability(const Node& node, const Vec3& x,
+                                              const Vec3& n) const {
+    const double a = nodes_[&node - nodes_.data() + 1].bounds.importance(x, n);
+    const double b = nodes_[node.second_child].bounds.importance(x, n);
+    if (!(a + b > 0)) return std::nan("");  // neither child can reach (x, n)
+    return a / (a + b);
+}
+
+double LightSelector::first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
+                                              Memo* memo) const {
+    if (!memo) return first_child_probability(node, x, n);
+    if (memo->owner != this || memo->stamps.size() != nodes_.size()) {
+        memo->owner = this;
+        memo->stamps.assign(nodes_.size(), 0);
+        memo->first_child.assign(nodes_.size(), 0.0);
+        memo->stamp = 0;
+    }
+    const bool same = memo->stamp > 0 && memo->x.x == x.x && memo->x.y == x.y &&
+                      memo->x.z == x.z && memo->n.x == n.x && memo->n.y == n.y &&
+                      memo->n.z == n.z;
+    if (!same) {
+        if (++memo->stamp == 0) {  // wrapped: forget everything
+            std::fill(memo->stamps.begin(), memo->stamps.end(), 0);
+            memo->stamp = 1;
+        }
+        memo->x = x;
+        memo->n = n;
+    }
+    const std::size_t i = std::size_t(&node - nodes_.data());
+    if (memo->stamps[i] != memo->stamp) {
+        memo->stamps[i] = memo->stamp;
+        memo->first_child[i] = first_child_probability(node, x, n);
+    }
+    return memo->first_child[i];
+}
+
+// Probability of drawing from the tree rather than an unbounded light, at a
+// point the tree's root can reach (else 0).
+double LightSelector::tree_probability(const Vec3& x, const Vec3& n) const {
+    if (nodes_.empty()) return 0;
+    const double choices = double(unbounded_.size() + 1);
+    return nodes_[0].bounds.importance(x, n) > 0 ? 1.0 / choices : 0.0;
+}
+
+bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
+    if (kind_ != Kind::Tree) return !ids_.empty();
+    return !unbounded_.empty() || tree_probability(x, n) > 0;
+}
+
+std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n, double u,
+                                                   Memo* memo) const {
+    if (ids_.empty()) return std::nullopt;
+    u = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
+    if (kind_ == Kind::Uniform) {
+        const std::size_t i = std::min(std::size_t(u * double(ids_.size())), ids_.size() - 1);
+        return SelectedLight{ids_[i], 1.0 / double(ids_.size())};
+    }
+    if (kind_ == Kind::Power) {
+        const std::size_t i = std::min<std::size_t>(
+            std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin(), ids_.size() - 1);
+        return SelectedLight{ids_[i], probability_[i]};
+    }
+    // Tree: an unbounded light or the tree, uniformly; then down the tree.
+    const std::size_t choices = unbounded_.size() + (nodes_.empty() ? 0 : 1);
+    const std::size_t pick = std::min(std::size_t(u * double(choices)), choices - 1);
+    if (pick < unbounded_.size()) return SelectedLight{unbounded_[pick], 1.0 / double(choices)};
+    double pmf = tree_probability(x, n);
+    if (!(pmf > 0)) return std::nullopt;
+    u = std::min(u * double(choices) - double(pick), std::nextafter(1.0, 0.0));
+    const Node* node = &nodes_[0];
+    while (node->light == ~0u) {
+        const double p = first_child_probability(*node, x, n, memo);
+        if (!(p >= 0)) return std::nullopt;
+        if (u < p) {
+            u = std::min(u / p, std::nextafter(1.0, 0.0));
+            pmf *= p;
+            node = node + 1;
+        } else {
+            u = std::min((u - p) / (1 - p), std::nextafter(1.0, 0.0));
+            pmf *= 1 - p;
+            node = &nodes_[node->second_child];
+        }
+    }
+    if (!(pmf > 0)) return std::nullopt;
+    return SelectedLight{node->light, pmf};
+}
+
+double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
+                          Memo* memo) const {
+    if (light >= slot_.size() || slot_[light] < 0) return 0;
+    const std::size_t slot = std::size_t(slot_[light]);
+    if (kind_ == Kind::Uniform) return 1.0 / double(ids_.size());
+    if (kind_ == Kind::Power) return probability_[slot];
+    const std::size_t choices = unbounded_.size() + (nodes_.empty() ? 0 : 1);
+    if (std::find(unbounded_.begin(), unbounded_.end(), light) != unbounded_.end())
+        return 1.0 / double(choices);
+    double pmf = tree_probability(x, n);
+    const Node* node = nodes_.empty() ? nullptr : &nodes_[0];
+    for (int level = 0; pmf > 0 && node && node->light == ~0u; ++level) {
+        const double p = first_child_probability(*node, x, n, memo);
+        if (!(p >= 0)) return 0;
+        if ((trail_[slot] >> level) & 1) {
+            pmf *= 1 - p;
+            node = &nodes_[node->second_child];
+        } else {
+            pmf *= p;
+            node = node + 1;
+        }
+    }
+    // A light of zero power is not in the tree: reaching another leaf means 0.
+    return node && node->light == light ? pmf : 0.0;
+}
+
+}  // namespace omis

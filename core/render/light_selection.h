@@ -1,0 +1,132 @@
+// Light selection (SPEC §3 `<selection>/…`): which light a light technique
+// draws toward, and the probability of drawing a given light, at a shading
+// point (x, n). Both cost O(1) or O(log L) whatever the light count L, and
+// need no per-point setup, so they may be evaluated at a new x for every
+// sample (pbrt-v4's LightSampler interface).
+//
+// - Uniform: 1/L.
+// - Power:   ∝ emitted power, by binary search in a CDF (O(log L)).
+// - Tree:    a light hierarchy (Estevez & Kulla 2018, "Importance sampling of
+//            many lights with adaptive tree splitting"; pbrt-v4's
+//            BVHLightSampler; Cycles 3.5's light tree): a BVH over the bounded
+//            lights whose nodes bound position, power and the cone of emission
+//            normals; each step down picks a child ∝ a conservative estimate of
+//            its contribution at (x, n). Unbounded lights (sun, world) are
+//            picked uniformly beside the tree.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "lights/light.h"
+
+namespace omis {
+
+struct SelectedLight {
+    std::uint32_t light = 0;  // index into the light list the selector was built on
+    double pmf = 0;
+};
+
+class LightSelector {
+public:
+    enum class Kind { Uniform, Power, Tree };
+
+    LightSelector() = default;
+    // Selects among lights[ids[i]]; `ids` must not repeat. scene_radius sizes
+    // distant lights' power (Light::power).
+    LightSelector(Kind kind, const std::vector<Light>& lights,
+                  const std::vector<std::uint32_t>& ids, double scene_radius);
+
+    Kind kind() const { return kind_; }
+    std::size_t size() const { return ids_.size(); }
+    bool empty() const { return ids_.empty(); }
+
+    // False only where no light can reach (x, n) (tree: by its bounds; the
+    // others do not know and say true).
+    bool may_reach(const Vec3& x, const Vec3& n) const;
+    // Scratch memory of one thread that remembers the tree's branching
+    // probabilities at one (x, n): the draw and the pmfs evaluated at the
+    // same point then share the work near the root.
+    class Memo {
+        friend class LightSelector;
+        const LightSelector* owner = nullptr;  // one memo per selector
+        Vec3 x, n;
+        std::uint32_t stamp = 0;
+        std::vector<std::uint32_t> stamps;
+        std::vector<double> first_child;
+    };
+
+    // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
+    // (tree only: every bound says so).
+    std::optional<SelectedLight> sample(const Vec3& x, const Vec3& n, double u,
+                                        Memo* memo = nullptr) const;
+    // The probability that sample() at (x, n) returns `light` (0 for a light
+    // not in the selection).
+    double pmf(const Vec3& x, const Vec3& n, std::uint32_t light, Memo* memo = nullptr) const;
+
+    // What the tree bounds: an axis-aligned box, the power inside, and the
+    // cone of emission directions (axis, half-angle θo, plus θe, how far past
+    // a normal light still leaves). Public for tests.
+    struct Bounds {
+        Vec3 lo, hi;
+        double power = 0;
+        Vec3 axis{0, 0, 1};
+        double cos_theta_o = 1, cos_theta_e = 1;
+        bool two_sided = false;
+        // Derived by finish(), for importance(): the box's centre and squared
+        // half-diagonal, and sin θo.
+        Vec3 centre;
+        double radius2 = 0, sin_theta_o = 0;
+        void finish();
+
+        // Upper estimate of the light's contribution at (x, n); 0 only where
+        // no light inside can reach (x, n).
+        double importance(const Vec3& x, const Vec3& n) const;
+    };
+    // The bounds of one light; empty for unbounded lights (sun, world).
+    static std::optional<Bounds> bounds_of(const Light& light, double scene_radius);
+
+private:
+    // Bounds in single precision, rounded so that they only grow (a wider
+    // box and cones): a node fits one cache line, which is what a draw among
+    // 100k lights waits for.
+    struct PackedBounds {
+        float centre[3] = {}, radius = 0, power = 0, axis[3] = {}, cos_theta_o = 1,
+              sin_theta_o = 0, cos_theta_e = 1;
+        bool two_sided = false;
+        PackedBounds() = default;
+        explicit PackedBounds(const Bounds& b);
+        double importance(const Vec3& x, const Vec3& n) const;
+    };
+    struct Node {
+        PackedBounds bounds;
+        std::uint32_t second_child = 0;  // interior: first child is the next node
+        std::uint32_t light = ~0u;       // leaf: light id; interior: ~0u
+    };
+    struct Entry {
+        Bounds bounds;
+        std::uint32_t light;
+    };
+    std::uint32_t build(std::vector<Entry>& entries, std::size_t begin, std::size_t end,
+                        std::uint64_t trail, int depth);
+    // Probability of taking the first child at an interior node.
+    double first_child_probability(const Node& node, const Vec3& x, const Vec3& n) const;
+    double first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
+                                   Memo* memo) const;
+    double tree_probability(const Vec3& x, const Vec3& n) const;
+
+    Kind kind_ = Kind::Uniform;
+    std::vector<std::uint32_t> ids_;
+    std::vector<std::int64_t> slot_;  // light id → index in ids_, or −1
+    std::vector<double> cdf_;         // Power: cumulative over ids_
+    std::vector<double> probability_; // Power: per index in ids_
+    // Tree
+    std::vector<Node> nodes_;
+    std::vector<Bounds> build_bounds_;  // per node, while building
+    std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
+    std::vector<std::uint64_t> trail_;      // per slot: child choices, root first (bit set: second)
+    std::vector<std::uint8_t> depth_;       // per slot
+};
+
+}  // namespace omis
