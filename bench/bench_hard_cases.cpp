@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "../tests/hard_cases/hard_cases.h"
+#include "support/hard_cases.h"
 
 using namespace omis;
 using namespace omis::hard_cases;

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "../hard_cases/hard_cases.h"
+#include "support/hard_cases.h"
 
 using namespace omis;
 using namespace omis::hard_cases;

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "mis/allocation.h"
-#include "mis/problems_1d.h"
+#include "support/problems_1d.h"
 
 using namespace omis;
 

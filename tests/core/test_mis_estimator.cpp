@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "mis/estimator.h"
-#include "mis/problems_1d.h"
+#include "support/problems_1d.h"
 #include "mis/solver.h"
 
 using namespace omis;

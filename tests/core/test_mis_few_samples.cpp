@@ -13,7 +13,7 @@
 #include <random>
 #include <vector>
 
-#include "mis/problems_1d.h"
+#include "support/problems_1d.h"
 
 using namespace omis;
 

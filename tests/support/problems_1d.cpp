@@ -1,4 +1,4 @@
-#include "mis/problems_1d.h"
+#include "support/problems_1d.h"
 
 #include <algorithm>
 #include <array>
