@@ -26,10 +26,8 @@ Vec3 unproject(const Frame& f, double qx, double qy) {
 
 }  // namespace
 
-std::optional<ParallelPolygon> ParallelPolygon::make(const Vec3& x, const Vec3& n,
-                                                     const Vec3& to_first,
+std::optional<ParallelPolygon> ParallelPolygon::make(const Vec3& n, const Vec3& to_first,
                                                      const std::vector<Vec3>& offsets) {
-    (void)x;
     const int count = static_cast<int>(offsets.size());
     if (count != 3 && count != 4) return std::nullopt;
     ParallelPolygon p;

@@ -20,8 +20,7 @@ constexpr double kParallelHorizonEps = 1e-8;
 class ParallelPolygon {
 public:
     // to_first = v0 − x, offsets[i] = v_i − v0 (offsets[0] = 0): far lights keep their size.
-    static std::optional<ParallelPolygon> make(const Vec3& x, const Vec3& n,
-                                               const Vec3& to_first,
+    static std::optional<ParallelPolygon> make(const Vec3& n, const Vec3& to_first,
                                                const std::vector<Vec3>& offsets);
     double projected_area() const { return area_; }
     Vec3 sample(double u1, double u2) const;

@@ -94,7 +94,7 @@ double RectLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
 }
 
 std::optional<ParallelPolygon> RectLight::parallel(const Vec3& x, const Vec3& n) const {
-    return ParallelPolygon::make(x, n, corner - x,
+    return ParallelPolygon::make(n, corner - x,
                                  {Vec3{}, edge_u, edge_u + edge_v, edge_v});
 }
 
@@ -170,7 +170,7 @@ double TriangleLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
 }
 
 std::optional<ParallelPolygon> TriangleLight::parallel(const Vec3& x, const Vec3& n) const {
-    return ParallelPolygon::make(x, n, p0 - x, {Vec3{}, p1 - p0, p2 - p0});
+    return ParallelPolygon::make(n, p0 - x, {Vec3{}, p1 - p0, p2 - p0});
 }
 
 std::optional<LightSample> TriangleLight::sample_parallel(const Vec3& x, const Vec3& n,

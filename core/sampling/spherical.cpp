@@ -131,79 +131,79 @@ Point2 SphericalRect::invert(const Vec3& w) const {
 std::optional<SphericalTriangle> SphericalTriangle::make(const Vec3& x, const Vec3& p0,
                                                          const Vec3& p1, const Vec3& p2) {
     SphericalTriangle s;
-    s.a_ = p0 - x;
-    s.eb_ = p1 - p0;
-    s.ec_ = p2 - p0;
-    s.omega_ = triangle_solid_angle(s.a_, s.eb_, s.ec_);
+    s.to_p0_ = p0 - x;
+    s.edge01_ = p1 - p0;
+    s.edge02_ = p2 - p0;
+    s.omega_ = triangle_solid_angle(s.to_p0_, s.edge01_, s.edge02_);
     if (!(s.omega_ > 0) || !std::isfinite(s.omega_)) return std::nullopt;
-    s.la_ = length(s.a_);
-    s.na_ = s.a_ / s.la_;
-    const Vec3 b = s.a_ + s.eb_;
-    s.lb_ = length(b);
-    s.nb_ = b / s.lb_;
+    s.dist_p0_ = length(s.to_p0_);
+    s.dir_p0_ = s.to_p0_ / s.dist_p0_;
+    const Vec3 b = s.to_p0_ + s.edge01_;
+    s.dist_p1_ = length(b);
+    s.dir_p1_ = b / s.dist_p1_;
     // Tangent at â toward ĉ: ĉ − (ĉ·â)â ∝ ec − (ec·â)â, formed from the edge.
-    const Vec3 t = s.ec_ - s.na_ * dot(s.ec_, s.na_);
+    const Vec3 t = s.edge02_ - s.dir_p0_ * dot(s.edge02_, s.dir_p0_);
     const double lt = length(t);
     if (!(lt > 0)) return std::nullopt;
-    s.tang_ = t / lt;
-    s.et_ = lt;
-    s.ea_ = dot(s.ec_, s.na_);
-    s.ab_ = dot(s.a_, b) / (s.la_ * s.lb_);
-    s.be_ = dot(s.nb_, s.tang_);
-    s.det_ = std::abs(dot(s.a_, cross(s.eb_, s.tang_))) / (s.la_ * s.lb_);
-    s.gamma_ac_ = std::atan2(length(cross(s.a_, s.ec_)), dot(s.a_, s.a_ + s.ec_));
-    if (!(s.det_ > 0)) return std::nullopt;
+    s.tangent_ = t / lt;
+    s.edge02_along_tangent_ = lt;
+    s.edge02_along_p0_ = dot(s.edge02_, s.dir_p0_);
+    s.cos_p0_p1_ = dot(s.to_p0_, b) / (s.dist_p0_ * s.dist_p1_);
+    s.dir_p1_dot_tangent_ = dot(s.dir_p1_, s.tangent_);
+    s.triple_p0_p1_tangent_ = std::abs(dot(s.to_p0_, cross(s.edge01_, s.tangent_))) / (s.dist_p0_ * s.dist_p1_);
+    s.angle_p0_p2_ = std::atan2(length(cross(s.to_p0_, s.edge02_)), dot(s.to_p0_, s.to_p0_ + s.edge02_));
+    if (!(s.triple_p0_p1_tangent_ > 0)) return std::nullopt;
     return s;
 }
 
 double SphericalTriangle::sub_solid_angle(double phi) const {
     // VOS on unit vectors â, b̂, p̂(φ) = cos φ â + sin φ t̂, expanded so that nothing cancels.
     const double sp = std::sin(phi), cp = std::cos(phi);
-    return 2.0 * std::atan2(det_ * sp, (1.0 + ab_) * (1.0 + cp) + be_ * sp);
+    return 2.0 * std::atan2(triple_p0_p1_tangent_ * sp, (1.0 + cos_p0_p1_) * (1.0 + cp) + dir_p1_dot_tangent_ * sp);
 }
 
 DirSample SphericalTriangle::sample(double u1, double u2) const {
     // Invert sub_solid_angle(φ) = u1·Ω in closed form through t = tan(φ/2).
     const double tau = 0.5 * u1 * omega_;
     const double st = std::sin(tau), ct = std::cos(tau);
-    double phi = 2.0 * std::atan2((1.0 + ab_) * st, det_ * ct - be_ * st);
-    phi = std::clamp(phi, 0.0, gamma_ac_);
+    double phi = 2.0 * std::atan2((1.0 + cos_p0_p1_) * st, triple_p0_p1_tangent_ * ct - dir_p1_dot_tangent_ * st);
+    phi = std::clamp(phi, 0.0, angle_p0_p2_);
     const double sp = std::sin(phi), cp = std::cos(phi);
-    const Vec3 p = na_ * cp + tang_ * sp;
+    const Vec3 p = dir_p0_ * cp + tangent_ * sp;
     // The arc b̂ → p̂ is the image of the planar segment p1 → C', C' = p0 + τ (p2 − p0):
     // its plane's normal b × (C' − p1) stays well defined when b̂ and p̂ are nearly
     // antipodal (x just above a large triangle), unlike b̂ × p̂.
-    const double tau_c = la_ * sp / (et_ * cp - ea_ * sp);
-    const Vec3 m = cross(a_ + eb_, ec_ * tau_c - eb_);
-    const Vec3 perp = cross(m, nb_);
+    const double tau_c = dist_p0_ * sp / (edge02_along_tangent_ * cp - edge02_along_p0_ * sp);
+    const Vec3 m = cross(to_p0_ + edge01_, edge02_ * tau_c - edge01_);
+    const Vec3 perp = cross(m, dir_p1_);
     const double lp = length(perp);
     DirSample out;
     if (!(lp > 0) || !std::isfinite(lp)) {
-        out.dir = nb_;
+        out.dir = dir_p1_;
     } else {
         // 1 − cos θ' = u2 (1 − cos γ)  ⇔  sin(θ'/2) = √u2 · sin(γ/2), sin(γ/2) = |p̂ − b̂|/2.
-        const double half = std::asin(std::min(1.0, std::sqrt(u2) * 0.5 * length(p - nb_)));
+        const double half = std::asin(std::min(1.0, std::sqrt(u2) * 0.5 * length(p - dir_p1_)));
         const double th = 2.0 * half;
-        out.dir = nb_ * std::cos(th) + perp * (std::sin(th) / lp);
+        out.dir = dir_p1_ * std::cos(th) + perp * (std::sin(th) / lp);
     }
     double b1, b2, t;
-    const Vec3 n = cross(eb_, ec_);
+    const Vec3 n = cross(edge01_, edge02_);
     const double den = dot(out.dir, n);
-    out.dist = den != 0 ? dot(a_, n) / den : std::numeric_limits<double>::max();
-    if (!(out.dist > 0) || !std::isfinite(out.dist)) out.dist = hit(out.dir, b1, b2, t) ? t : la_;
+    out.dist = den != 0 ? dot(to_p0_, n) / den : std::numeric_limits<double>::max();
+    if (!(out.dist > 0) || !std::isfinite(out.dist)) out.dist = hit(out.dir, b1, b2, t) ? t : dist_p0_;
     return out;
 }
 
 bool SphericalTriangle::hit(const Vec3& w, double& b1, double& b2, double& t) const {
-    const Vec3 n = cross(eb_, ec_);
+    const Vec3 n = cross(edge01_, edge02_);
     const double den = dot(w, n);
     if (den == 0) return false;
-    t = dot(a_, n) / den;
+    t = dot(to_p0_, n) / den;
     if (!(t > 0)) return false;
-    const Vec3 r = w * t - a_;
+    const Vec3 r = w * t - to_p0_;
     const double nn = dot(n, n);
-    b1 = dot(cross(r, ec_), n) / nn;
-    b2 = dot(cross(eb_, r), n) / nn;
+    b1 = dot(cross(r, edge02_), n) / nn;
+    b2 = dot(cross(edge01_, r), n) / nn;
     return b1 >= -kHitTol && b2 >= -kHitTol && b1 + b2 <= 1 + kHitTol;
 }
 
@@ -218,10 +218,10 @@ Point2 SphericalTriangle::invert(const Vec3& w) const {
     const double s = 1.0 - b1;  // the hit is (1−s)·p1 + s·C', C' = p0 + τ (p2 − p0)
     if (!(s > 0)) return {0.0, 0.0};
     const double tau = std::clamp(b2 / s, 0.0, 1.0);
-    const double phi = std::atan2(length(cross(a_, ec_)) * tau, dot(a_, a_ + ec_ * tau));
+    const double phi = std::atan2(length(cross(to_p0_, edge02_)) * tau, dot(to_p0_, to_p0_ + edge02_ * tau));
     const double u1 = sub_solid_angle(phi) / omega_;
-    const Vec3 p = na_ * std::cos(phi) + tang_ * std::sin(phi);
-    const Vec3 dw = w - nb_, dp = p - nb_;
+    const Vec3 p = dir_p0_ * std::cos(phi) + tangent_ * std::sin(phi);
+    const Vec3 dw = w - dir_p1_, dp = p - dir_p1_;
     const double dd = dot(dp, dp);
     return {std::clamp(u1, 0.0, 1.0), dd > 0 ? std::clamp(dot(dw, dw) / dd, 0.0, 1.0) : 0.0};
 }

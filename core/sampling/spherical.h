@@ -71,8 +71,18 @@ private:
     double sub_solid_angle(double phi) const;
     // Barycentrics (of p1, p2) and distance of the hit of w, if any.
     bool hit(const Vec3& w, double& b1, double& b2, double& t) const;
-    Vec3 a_, eb_, ec_, na_, nb_, tang_;  // a_ = p0 − x; unit a, unit b, tangent at a toward c
-    double la_ = 0, lb_ = 0, et_ = 0, ea_ = 0, ab_ = 0, be_ = 0, det_ = 0, gamma_ac_ = 0, omega_ = 0;
+    // Vectors from x (to_p0_ = p0 − x) and the edges from p0, kept apart so far
+    // lights keep their size; unit directions to p0 and p1; the unit tangent at
+    // p̂0 of the great circle toward p̂2.
+    Vec3 to_p0_, edge01_, edge02_, dir_p0_, dir_p1_, tangent_;
+    double dist_p0_ = 0, dist_p1_ = 0;           // |p0 − x|, |p1 − x|
+    double edge02_along_tangent_ = 0;            // (p2 − p0)·t̂, the length of its tangential part
+    double edge02_along_p0_ = 0;                 // (p2 − p0)·p̂0
+    double cos_p0_p1_ = 0;                       // p̂0·p̂1
+    double dir_p1_dot_tangent_ = 0;              // p̂1·t̂
+    double triple_p0_p1_tangent_ = 0;            // |p̂0·(p̂1 × t̂)|
+    double angle_p0_p2_ = 0;                     // the arc from p̂0 to p̂2
+    double omega_ = 0;                           // solid angle
 };
 
 }  // namespace omis
