@@ -211,6 +211,91 @@ def scene_suzanne_vertices():
     return [monkey]
 
 
+def _emission_material(name, color, strength):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    em = nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (*color, 1.0)
+    em.inputs["Strength"].default_value = strength
+    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return mat
+
+
+def scene_many_lights(size=SIZE):
+    # Issue 8: 64 lights of mixed types (squares, disks, points with and without
+    # radius, spots) in an 8 × 8 grid over the receiver, and a box shadowing it:
+    # the effect plan's light tree and its drawn delta lights against Cycles.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    kinds = ('SQUARE', 'DISK', 'POINT', 'POINT_DELTA', 'SPOT')
+    for j in range(8):
+        for i in range(8):
+            k = (i + 3 * j) % len(kinds)
+            x, y = -0.9 + i * (1.8 / 7), -0.9 + j * (1.8 / 7)
+            z = 0.5 + 0.08 * ((i * 5 + j * 3) % 7)
+            name = f"l{j}{i}"
+            color = (1.0, 0.6 + 0.05 * i, 0.4 + 0.07 * j)
+            if kinds[k] in ('SQUARE', 'DISK'):
+                U.add_light('AREA', name, energy=3.0 + (i + j) % 4, location=(x, y, z),
+                            rotation=(U.deg(10 * (i - 4)), U.deg(8 * (j - 4)), 0),
+                            shape=kinds[k], size=0.15, color=color)
+            elif kinds[k] == 'SPOT':
+                U.add_light('SPOT', name, energy=6.0, location=(x, y, z),
+                            rotation=(U.deg(12), 0, 0), spot_size=U.deg(70),
+                            spot_blend=0.2, shadow_soft_size=0.0, color=color)
+            else:
+                U.add_light('POINT', name, energy=2.0, location=(x, y, z), color=color,
+                            shadow_soft_size=0.05 if kinds[k] == 'POINT' else 0.0)
+    U.add_box("occluder", (0.5, 0.3, 0.05), (0.1, -0.1, 0.3))
+    return objs
+
+
+def scene_emissive_mesh(size=SIZE):
+    # Issue 8: an emissive UV sphere of 16,256 triangles (128 × 64) above the
+    # receiver, its lower half shading part of it from a small square light.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=128, ring_count=64, radius=0.3,
+                                         location=(0.2, 0.1, 0.6))
+    sphere = bpy.context.active_object
+    sphere.name = "glow_sphere"
+    sphere.data.materials.append(_emission_material("Glow", (1.0, 0.85, 0.7), 3.0))
+    U.add_light('AREA', "square", energy=40.0, location=(0.35, 0.2, 1.4), shape='SQUARE',
+                size=0.3)
+    return objs
+
+
+def scene_disk_near(size=SIZE):
+    # Issue 8: a large disk lamp (1.2 m) 3 cm above the receiver: only an exact
+    # solid-angle sampler (or bsdf) gets the texels under it right.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    U.add_light('AREA', "disk_near", energy=40.0, location=(0.2, -0.1, 0.03),
+                shape='DISK', size=1.2)
+    return objs
+
+
+def scene_spread_walls(size=SIZE):
+    # Issue 8: spread area lights close to surfaces: a narrow-spread rectangle
+    # 30 cm from the receiver at a slant, a spread disk 40 cm above it, and a
+    # wall beside them that also shadows.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    U.add_light('AREA', "rect_spread30", energy=40.0, location=(-0.4, -0.3, 0.3),
+                rotation=(U.deg(-20), U.deg(25), 0), shape='RECTANGLE', size=0.6,
+                size_y=0.2, spread=U.deg(50))
+    U.add_light('AREA', "disk_spread60", energy=30.0, location=(0.4, 0.3, 0.4),
+                rotation=(0, U.deg(-15), 0), shape='DISK', size=0.4, spread=U.deg(90))
+    bpy.ops.mesh.primitive_plane_add(size=1.0, location=(0.0, 0.9, 0.25),
+                                     rotation=(U.deg(90), 0, 0))
+    wall = bpy.context.active_object
+    wall.name = "wall"
+    wall.scale = (2.0, 0.5, 1.0)
+    return objs
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
@@ -223,6 +308,10 @@ SCENES = {
     "principled_r05": scene_principled_r05,
     "principled_r1": scene_principled_r1,
     "oren_nayar": scene_oren_nayar,
+    "many_lights": scene_many_lights,
+    "emissive_mesh": scene_emissive_mesh,
+    "disk_near": scene_disk_near,
+    "spread_walls": scene_spread_walls,
 }
 
 

@@ -169,7 +169,9 @@ def compare_to_cycles(label, omis_value, omis_noise, omis_mask, cycles_a, cycles
         for dx in (-1, 0, 1):
             interior &= np.roll(np.roll(mask, dy, 0), dx, 1)
     interior[0, :] = interior[-1, :] = interior[:, 0] = interior[:, -1] = False
-    var_c = box_mean(0.25 * (a - b) ** 2, interior, 3)          # variance of the mean c
+    # Variance of the mean c; differences of cumulative sums can round below 0
+    # where a whole window is black (NaN under the square root otherwise).
+    var_c = np.maximum(box_mean(0.25 * (a - b) ** 2, interior, 3), 0.0)
     var_o = (omis_noise.astype(np.float64) * o) ** 2
     sigma = np.sqrt(var_c + var_o)
     step = np.zeros_like(o)
