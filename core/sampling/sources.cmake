@@ -4,4 +4,5 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/parallel.cpp
     ${CMAKE_CURRENT_LIST_DIR}/shapes.cpp
     ${CMAKE_CURRENT_LIST_DIR}/irradiance.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/sequence.cpp
 )
