@@ -96,6 +96,42 @@ UvCoverage rasterize_uv(const Mesh& mesh, int width, int height) {
     return c;
 }
 
+namespace {
+
+// Mirror repeat into [0, max]: a coordinate past the triangle's edge comes back
+// inside instead of piling up on the edge (as Cycles' bake_clamp_mirror_repeat).
+double mirror_clamp(double u, double max) {
+    if (!(max > 0)) return 0;
+    const double t = u / max, whole = std::floor(t), frac = t - whole;
+    return (static_cast<long long>(whole) & 1 ? 1 - frac : frac) * max;
+}
+
+}  // namespace
+
+TexelFootprintMap::TexelFootprintMap(const Mesh& mesh, const UvCoverage& cov, std::size_t texel)
+    : triangle_(cov.triangle.at(texel)), b1_(cov.b1[texel]), b2_(cov.b2[texel]) {
+    if (triangle_ == kNoTriangle)
+        throw std::invalid_argument("texel: " + std::to_string(texel) + " is not covered");
+    // d(b1, b2)/d(texel x, y): the inverse of the UV triangle's Jacobian in
+    // texel units (constant over the triangle; non-singular, as it covers a
+    // texel centre).
+    const auto& uv0 = mesh.corner_uvs[3 * triangle_];
+    const auto& uv1 = mesh.corner_uvs[3 * triangle_ + 1];
+    const auto& uv2 = mesh.corner_uvs[3 * triangle_ + 2];
+    const double e1x = (uv1[0] - uv0[0]) * cov.width, e1y = (uv1[1] - uv0[1]) * cov.height;
+    const double e2x = (uv2[0] - uv0[0]) * cov.width, e2y = (uv2[1] - uv0[1]) * cov.height;
+    const double det = e1x * e2y - e2x * e1y;
+    db1dx_ = e2y / det;
+    db1dy_ = -e2x / det;
+    db2dx_ = -e1y / det;
+    db2dy_ = e1x / det;
+}
+
+std::array<double, 2> TexelFootprintMap::barycentrics(double u, double v) const {
+    const double b1 = mirror_clamp(b1_ + db1dx_ * (u - 0.5) + db1dy_ * (v - 0.5), 1.0);
+    return {b1, mirror_clamp(b2_ + db2dx_ * (u - 0.5) + db2dy_ * (v - 0.5), 1.0 - b1)};
+}
+
 std::vector<std::int64_t> margin_sources(const UvCoverage& c, int margin) {
     const int W = c.width, H = c.height;
     std::vector<std::int64_t> source(std::size_t(W) * H, -1);

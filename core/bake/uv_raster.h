@@ -4,6 +4,7 @@
 // Blender stores image pixels).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -33,6 +34,24 @@ struct UvCoverage {
 // double coverage along shared edges. Throws std::invalid_argument when the
 // mesh has no UVs or the size is unusable.
 UvCoverage rasterize_uv(const Mesh& mesh, int width, int height);
+
+// A covered texel's footprint, as Cycles' bake samples it
+// (kernel/integrator/init_from_bake.h, 3.4): the texel's square in UV space
+// through the centre's barycentrics plus the texel differentials times
+// (u − ½, v − ½), mirror-clamped back into the same triangle. Unlike Cycles,
+// no sample is forced to the centre, so a mean over uniform (u, v) is the
+// box-filtered value at every sample count.
+class TexelFootprintMap {
+public:
+    TexelFootprintMap(const Mesh& mesh, const UvCoverage& coverage, std::size_t texel);
+    // (b1, b2) for (u, v) in [0, 1]²; (½, ½) is the texel centre.
+    std::array<double, 2> barycentrics(double u, double v) const;
+    std::uint32_t triangle() const { return triangle_; }
+
+private:
+    std::uint32_t triangle_;
+    double b1_, b2_, db1dx_, db1dy_, db2dx_, db2dy_;
+};
 
 // Extends covered texels into uncovered ones up to `margin` texels away
 // (Chebyshev distance, as repeated 8-neighbour dilation), each filled texel

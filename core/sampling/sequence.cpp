@@ -50,18 +50,27 @@ std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
     return reverse_bits(laine_karras(reverse_bits(x), seed));
 }
 
+ScrambledSobol::ScrambledSobol(std::uint64_t seed) : seed_(seed) {
+    for (std::uint32_t g = 0; g < kCachedGroups; ++g)
+        for (std::uint32_t salt = 0; salt < 3; ++salt) cached_[g][salt] = group_seed(seed, g, salt);
+}
+
+std::uint32_t ScrambledSobol::seed(std::uint32_t group, std::uint32_t salt) const {
+    return group < kCachedGroups ? cached_[group][salt] : group_seed(seed_, group, salt);
+}
+
 double ScrambledSobol::get_1d(std::uint32_t index, std::uint32_t group) const {
     // Shuffling the index by a nested scramble keeps aligned power-of-two
     // blocks together, so prefixes stay stratified.
-    const std::uint32_t i = owen_scramble(index, group_seed(seed_, group, 0));
-    return to_unit(owen_scramble(sobol_dim0(i), group_seed(seed_, group, 1)));
+    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    return to_unit(owen_scramble(sobol_dim0(i), seed(group, 1)));
 }
 
 void ScrambledSobol::get_2d(std::uint32_t index, std::uint32_t group, double& u,
                             double& v) const {
-    const std::uint32_t i = owen_scramble(index, group_seed(seed_, group, 0));
-    u = to_unit(owen_scramble(sobol_dim0(i), group_seed(seed_, group, 1)));
-    v = to_unit(owen_scramble(sobol_dim1(i), group_seed(seed_, group, 2)));
+    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    u = to_unit(owen_scramble(sobol_dim0(i), seed(group, 1)));
+    v = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
 }
 
 }  // namespace omis

@@ -18,14 +18,17 @@ namespace omis {
 // Seeds for one stream of samples (one texel and technique and randomization).
 class ScrambledSobol {
 public:
-    explicit ScrambledSobol(std::uint64_t seed) : seed_(seed) {}
+    explicit ScrambledSobol(std::uint64_t seed);
 
     // Dimension group `group` (any small integer) of sample `index`.
     double get_1d(std::uint32_t index, std::uint32_t group) const;
     void get_2d(std::uint32_t index, std::uint32_t group, double& u, double& v) const;
 
 private:
+    static constexpr std::uint32_t kCachedGroups = 4;
+    std::uint32_t seed(std::uint32_t group, std::uint32_t salt) const;
     std::uint64_t seed_;
+    std::uint32_t cached_[kCachedGroups][3];  // the seeds of the first groups
 };
 
 // The building blocks, exposed for tests.
