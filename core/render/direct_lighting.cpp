@@ -262,7 +262,6 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
                  .first;
     }
     it->second.reset();
-    ++counters.systems;
     return it->second;
 }
 
@@ -414,7 +413,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     for (int r = first_round; r < first_round + rounds; ++r) ++stream_rounds[r % K];
     const int streams_used = int(std::count_if(stream_rounds, stream_rounds + K,
                                                [](int m) { return m > 0; }));
-    const bool by_stream = streams_used >= 2;
+    const bool by_stream = streams_used >= 2 && variance;  // null: not asked for
 
     // Estimators: one over all rounds, and one per stream for the error.
     const bool fresh = counts_in != nullptr;  // counts differ from the cached ones
@@ -425,6 +424,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
         if (s >= 0 && (!by_stream || stream_rounds[s] == 0)) continue;
         const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
         Estimators& e = s < 0 ? all : per[s];
+        if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
         e.main = &estimator(main_cache_, key | active.mask, active.all, counts, fresh);
         if (hidden)
             e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
@@ -487,7 +487,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     }
     for (int c = 0; c < 3; ++c) {
         value[c] = total[c];
-        variance[c] = error_variance[c];
+        if (variance) variance[c] = error_variance[c];
         if (own_variance_out) own_variance_out[c] = own_variance[c];
     }
 }
@@ -573,7 +573,11 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, 0, settings.rounds, x, n, n, value + 3 * i, variance + 3 * i);
+            // Variance as for independent draws: an upper bound for these
+            // correlated ones (the baker pools the streams' honest estimate
+            // over neighbouring texels; lone points have no neighbours).
+            shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr, value + 3 * i,
+                         nullptr, nullptr, variance + 3 * i);
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {

@@ -115,7 +115,8 @@ public:
     // pass (an exact sample budget). own_variance, if given, receives the
     // variance as computed for independent draws (many degrees of freedom,
     // but too high for correlated draws): callers may pool the ratio of the
-    // two over neighbouring points.
+    // two over neighbouring points. variance may be null (then the streams
+    // are not compared, which saves their estimators).
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
                const int* counts = nullptr, double own_variance[3] = nullptr);
