@@ -9,8 +9,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <mutex>
 #include <stdexcept>
 
@@ -374,7 +372,11 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     };
 
     int pass_count = 0, done_rounds = 0;
-    int next_rounds = progressive ? settings.rounds_per_pass : budget.full_rounds;
+    // Under a time budget the first pass — the part a budget cannot cut — is
+    // a single round, so small budgets are not eaten by it.
+    int next_rounds = !progressive ? budget.full_rounds
+                      : settings.time_budget > 0 ? 1
+                                                 : settings.rounds_per_pass;
     bool last_done = budget.last.empty();
     PassTimer timer;
     BakeStatus status = BakeStatus::Complete;
@@ -403,9 +405,6 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         const double pass_start = elapsed();
         run_pass(pass);
         timer.add(pass.samples, elapsed() - pass_start);
-        if (std::getenv("OMIS_DEBUG_PASSES"))
-            std::fprintf(stderr, "pass %d: rounds %d samples %u: %.4f s (at %.4f)\n", pass_count,
-                         pass.rounds, pass.samples, elapsed() - pass_start, elapsed());
         ++pass_count;
         if (cancel) {
             status = BakeStatus::Cancelled;
@@ -413,7 +412,11 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         }
         if (pass.counts) last_done = true;
         done_rounds += pass.rounds;
-        next_rounds = int(std::min<long long>(1LL << 24, 2LL * pass.rounds));
+        // Doubling keeps the per-pass cost small; under a noise target passes
+        // grow by half only, so a texel overshoots its target by at most
+        // √1.5 ≈ 1.22 in error.
+        const double growth = settings.noise_target > 0 ? 1.5 : 2.0;
+        next_rounds = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
         if (settings.noise_target > 0 &&
             std::all_of(state.begin(), state.end(), [&](const PointState& s) { return s.done; })) {
             status = BakeStatus::NoiseTarget;

@@ -29,8 +29,9 @@ struct BakeSettings {
     bool smooth_normals = true; // interpolate corner normals (else flat)
     double time_budget = 0;     // seconds; 0 = none
     double noise_target = 0;    // relative standard error per texel; 0 = none
-    // Rounds of the first pass when a time or noise budget asks for
-    // progressive passes (later passes double). Each pass is one estimate per
+    // Rounds of the first pass when a noise target asks for progressive
+    // passes (later passes grow); under a time budget the first pass is one
+    // round. Each pass is one estimate per
     // texel (its own solve); passes are averaged, weighted by samples.
     int rounds_per_pass = 4;
     int threads = 0;            // worker threads; 0 = all cores

@@ -109,27 +109,31 @@ double mirror_clamp(double u, double max) {
 }  // namespace
 
 TexelFootprintMap::TexelFootprintMap(const Mesh& mesh, const UvCoverage& cov, std::size_t texel)
-    : triangle_(cov.triangle.at(texel)), b1_(cov.b1[texel]), b2_(cov.b2[texel]) {
+    : triangle_(cov.triangle.at(texel)) {
     if (triangle_ == kNoTriangle)
         throw std::invalid_argument("texel: " + std::to_string(texel) + " is not covered");
-    // d(b1, b2)/d(texel x, y): the inverse of the UV triangle's Jacobian in
-    // texel units (constant over the triangle; non-singular, as it covers a
-    // texel centre).
+    // As Cycles: a and b are the weights of corners 0 and 1 (corner 2 is the
+    // origin). Their derivatives per texel step are the inverse of the UV
+    // triangle's Jacobian in texel units, halved as Blender's
+    // bake_differentials does (so the box is half a texel wide).
+    a_ = 1.0 - double(cov.b1[texel]) - double(cov.b2[texel]);
+    b_ = cov.b1[texel];
     const auto& uv0 = mesh.corner_uvs[3 * triangle_];
     const auto& uv1 = mesh.corner_uvs[3 * triangle_ + 1];
     const auto& uv2 = mesh.corner_uvs[3 * triangle_ + 2];
-    const double e1x = (uv1[0] - uv0[0]) * cov.width, e1y = (uv1[1] - uv0[1]) * cov.height;
-    const double e2x = (uv2[0] - uv0[0]) * cov.width, e2y = (uv2[1] - uv0[1]) * cov.height;
-    const double det = e1x * e2y - e2x * e1y;
-    db1dx_ = e2y / det;
-    db1dy_ = -e2x / det;
-    db2dx_ = -e1y / det;
-    db2dy_ = e1x / det;
+    const double e0x = (uv0[0] - uv2[0]) * cov.width, e0y = (uv0[1] - uv2[1]) * cov.height;
+    const double e1x = (uv1[0] - uv2[0]) * cov.width, e1y = (uv1[1] - uv2[1]) * cov.height;
+    const double scale = kTexelFootprintScale / (e0x * e1y - e0y * e1x);  // non-zero: covers a centre
+    dadx_ = e1y * scale;
+    dady_ = -e1x * scale;
+    dbdx_ = -e0y * scale;
+    dbdy_ = e0x * scale;
 }
 
 std::array<double, 2> TexelFootprintMap::barycentrics(double u, double v) const {
-    const double b1 = mirror_clamp(b1_ + db1dx_ * (u - 0.5) + db1dy_ * (v - 0.5), 1.0);
-    return {b1, mirror_clamp(b2_ + db2dx_ * (u - 0.5) + db2dy_ * (v - 0.5), 1.0 - b1)};
+    const double a = mirror_clamp(a_ + dadx_ * (u - 0.5) + dady_ * (v - 0.5), 1.0);
+    const double b = mirror_clamp(b_ + dbdx_ * (u - 0.5) + dbdy_ * (v - 0.5), 1.0 - a);
+    return {b, std::max(0.0, 1.0 - a - b)};
 }
 
 std::vector<std::int64_t> margin_sources(const UvCoverage& c, int margin) {

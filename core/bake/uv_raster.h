@@ -35,12 +35,18 @@ struct UvCoverage {
 // mesh has no UVs or the size is unusable.
 UvCoverage rasterize_uv(const Mesh& mesh, int width, int height);
 
+// Width of a texel's footprint in texels. Blender computes the texel
+// differentials it hands to Cycles' bake with a factor ½
+// (render/intern/bake.cc, bake_differentials), so Cycles box-filters over
+// the central half-texel square; omis follows it to bake the same quantity.
+constexpr double kTexelFootprintScale = 0.5;
+
 // A covered texel's footprint, as Cycles' bake samples it
-// (kernel/integrator/init_from_bake.h, 3.4): the texel's square in UV space
-// through the centre's barycentrics plus the texel differentials times
-// (u − ½, v − ½), mirror-clamped back into the same triangle. Unlike Cycles,
-// no sample is forced to the centre, so a mean over uniform (u, v) is the
-// box-filtered value at every sample count.
+// (kernel/integrator/init_from_bake.h, 3.4): a square around the texel centre
+// (kTexelFootprintScale texels wide) through the centre's barycentrics plus
+// the differentials times (u − ½, v − ½), mirror-clamped back into the same
+// triangle. Unlike Cycles, no sample is forced to the centre, so a mean over
+// uniform (u, v) is the box-filtered value at every sample count.
 class TexelFootprintMap {
 public:
     TexelFootprintMap(const Mesh& mesh, const UvCoverage& coverage, std::size_t texel);
@@ -50,7 +56,7 @@ public:
 
 private:
     std::uint32_t triangle_;
-    double b1_, b2_, db1dx_, db1dy_, db2dx_, db2dy_;
+    double a_, b_, dadx_, dady_, dbdx_, dbdy_;  // weights of corners 0 and 1
 };
 
 // Extends covered texels into uncovered ones up to `margin` texels away
