@@ -267,10 +267,14 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
 
 void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footprint* footprint,
                                         Active& active) {
-    // A light technique takes part when its sampler reaches a light from the
-    // centre or a corner of the footprint. Where it reaches none from a
-    // sample's own position its draws there are null samples (density zero
-    // at that position), which keeps the combination unbiased.
+    // Light choice (which lights, with what probability) is made once per
+    // point, at its centre — or, where no light applies there, at the first
+    // corner of the footprint where one does — and kept for every sample of
+    // the footprint. A fixed choice is a valid technique at every position:
+    // its density at a sample's own position x_s is Σ_l P(l) p_l(ω | x_s),
+    // which is what technique_pdf evaluates, so the combination stays
+    // unbiased; a light that applies nowhere it was probed is left to the
+    // other techniques there.
     SurfacePoint probes[5] = {centre, centre, centre, centre, centre};
     int n_probes = 1;
     if (footprint)
@@ -323,7 +327,6 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         sequence.get_2d(index, 0, fu, fv);
         p = footprint->at(fu, fv);
         ++point_serial_;  // the solid-angle cache holds one position's shapes
-        for (int k : active.lights) choose_lights(k, p.x, p.n);
     }
     const int k = active.all[a];
     const Technique& t = p_.settings.techniques[k];
@@ -356,9 +359,13 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     // p_k(ω | x).
     double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
     if (ok) {
-        for (std::size_t b = 0; b < active.all.size(); ++b)
+        for (std::size_t b = 0; b < active.all.size(); ++b) {
             pdfs[b] = technique_pdf(active.all[b], p.x, p.n, w);
-        ok = pdfs[a] > 0 && std::isfinite(pdfs[a]);
+            // A light seen edge-on from x_s (a measure-zero configuration)
+            // can give a non-finite density: it cannot produce ω there.
+            if (!std::isfinite(pdfs[b])) pdfs[b] = 0;
+        }
+        ok = pdfs[a] > 0;
     }
     if (!ok) {
         for (int e = 0; e < n_into; ++e) {
