@@ -124,7 +124,14 @@ SampleBudget plan_samples(const LightingContext& context, long long samples, int
     SampleBudget b;
     const std::vector<int>& counts = context.settings.samples;
     for (int k : context.techniques) b.per_round += counts[k];
-    if (samples <= 0 || b.per_round <= 0) {
+    if (b.per_round <= 0) {
+        // Delta lights only (or nothing): a round is one evaluation of them at
+        // one position of the footprint, and counts as one sample.
+        b.per_round = 1;
+        b.full_rounds = int(std::clamp<long long>(samples > 0 ? samples : rounds, 1, 1LL << 30));
+        return b;
+    }
+    if (samples <= 0) {
         b.full_rounds = std::max(1, rounds);
         return b;
     }
@@ -374,9 +381,12 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     int pass_count = 0, done_rounds = 0;
     // Under a time budget the first pass — the part a budget cannot cut — is
     // a single round, so small budgets are not eaten by it.
+    // (Optimal strategies solve per pass, and a one-round solve is poor:
+    // they keep rounds_per_pass.)
+    const bool single_first = settings.time_budget > 0 && !is_optimal(settings.lighting.strategy);
     int next_rounds = !progressive ? budget.full_rounds
-                      : settings.time_budget > 0 ? 1
-                                                 : settings.rounds_per_pass;
+                      : single_first ? 1
+                                     : settings.rounds_per_pass;
     bool last_done = budget.last.empty();
     PassTimer timer;
     BakeStatus status = BakeStatus::Complete;
