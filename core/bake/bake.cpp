@@ -340,7 +340,8 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // A tile's points join their running means. Their variance: the
     // independent-draw formula (stable per point, but too high for correlated
     // draws) scaled by the tile's ratio of the streams' honest estimate to it
-    // (unbiased, with many degrees of freedom once pooled over the tile).
+    // (many degrees of freedom once pooled over the tile), or the point's own
+    // streams' estimate where that is larger.
     auto accumulate = [&](const Pass& pass, const std::vector<Shaded>& tile) {
         double sum_stream = 0, sum_own = 0;
         for (const Shaded& r : tile) {
@@ -356,7 +357,11 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
             const double weight = double(pass.samples) / s.weight;
             float* mean = &result.value[3 * r.i];
             for (int c = 0; c < 3; ++c) mean[c] += float((r.value[c] - mean[c]) * weight);
-            const double variance = pooled ? r.own_variance * ratio : r.stream_variance;
+            // The larger of the two: a tile's ratio comes mostly from its smooth
+            // texels, and would understate a texel whose own streams disagree
+            // more (rare bright samples, a shadow edge).
+            const double variance =
+                pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
             s.variance_sum += float(double(pass.samples) * pass.samples * variance);
             if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
                 relative_error(s, mean) <= settings.noise_target)
