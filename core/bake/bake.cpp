@@ -363,8 +363,11 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
             const double variance =
                 pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
             s.variance_sum += float(double(pass.samples) * pass.samples * variance);
+            // A point whose samples all agreed (nothing seen yet, typically a
+            // shadowed texel that rare samples light) gives no error estimate:
+            // it is not done, but keeps sampling while others still need to.
             if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-                relative_error(s, mean) <= settings.noise_target)
+                s.variance_sum > 0 && relative_error(s, mean) <= settings.noise_target)
                 s.done = true;
         }
     };
@@ -433,7 +436,9 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         const double growth = settings.noise_target > 0 ? 1.5 : 2.0;
         next_rounds = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
         if (settings.noise_target > 0 &&
-            std::all_of(state.begin(), state.end(), [&](const PointState& s) { return s.done; })) {
+            std::all_of(state.begin(), state.end(), [&](const PointState& s) {
+                return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance_sum == 0);
+            })) {
             status = BakeStatus::NoiseTarget;
             break;
         }
