@@ -301,7 +301,26 @@ TEST_CASE("samples = N takes exactly N per texel", "[bake]") {
         }
 }
 
-TEST_CASE("footprint: every texel's samples lie in its triangle, and in its UV square "
+TEST_CASE("a scene without lights bakes black (not NaN) with the asked sample count", "[bake]") {
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    Scene scene;
+    scene.add_mesh(grid_mesh(2, 0.0, 3, positions, triangles, uvs));
+    scene.commit();
+    for (double budget : {0.0, 0.05}) {
+        BakeSettings s;
+        s.width = s.height = 8;
+        s.samples = 16;
+        s.time_budget = budget;
+        const BakeResult r = bake(scene, s);
+        for (float v : r.value) CHECK(v == 0.f);
+        for (float e : r.noise) CHECK(e == 0.f);
+        if (budget == 0)
+            for (std::uint32_t k : r.samples) CHECK(k == 16u);
+    }
+}
+
+TEST_CASE("footprint: every texel's samples lie in its triangle and in its UV square "
           "unless mirrored back from beyond the triangle's edge", "[bake]") {
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;

@@ -31,7 +31,7 @@ bool is_net(const std::vector<double>& u, const std::vector<double>& v, int m) {
 
 }  // namespace
 
-TEST_CASE("sequence: unscrambled Sobol' pairs are (0,m,2)-nets", "[sequence]") {
+TEST_CASE("sequence: unscrambled Sobol' pairs are nets of quality zero (every elementary interval holds one point)", "[sequence]") {
     for (int m = 1; m <= 10; ++m) {
         std::vector<double> u, v;
         for (std::uint32_t i = 0; i < (1u << m); ++i) {
