@@ -60,11 +60,20 @@ def accuracy_costs_time(scene, floor, size, targets, cap, reference_spp):
             st = r.stats
             done = st["status"] == "noise target reached"
             err = np.sqrt(np.mean(((r.value[..., 1][lit] - ref[lit]) / ref[lit]) ** 2))
-            cells.append((st["seconds"], done, st["samples_per_texel"], err))
+            est = np.sqrt(np.mean(r.noise[lit] ** 2))
+            cells.append((st["seconds"], done, st["samples_per_texel"], err, est))
             table[(s, t)] = cells[-1]
         print("   " + f"{s:<22}" + "".join(
             f"{(('%.2f s' % sec) if ok else ('>%g s' % cap)) + (' (%.1f %%)' % (100 * e)):>22}"
-            for sec, ok, _, e in cells))
+            for sec, ok, _, e, _ in cells))
+    print("   estimated / true relative RMS error (honest noise: within [0.8, 1.25]):")
+    for s in STRATEGIES:
+        print("   " + f"{s:<22}" + "".join(f"{table[(s, t)][4] / table[(s, t)][3]:>22.2f}"
+                                         for t in targets))
+    print("   true relative RMS error / target (a target stops at the error it names: "
+          "within [0.8, 1]):")
+    for s in STRATEGIES:
+        print("   " + f"{s:<22}" + "".join(f"{table[(s, t)][3] / t:>22.2f}" for t in targets))
     print("   mean samples per texel spent:")
     for s in STRATEGIES:
         print("   " + f"{s:<22}" + "".join(f"{table[(s, t)][2]:>22.0f}" for t in targets))

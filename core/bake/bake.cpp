@@ -20,29 +20,42 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// One shading point of the bake: a texel centre, a vertex or a corner.
-struct BakePoint {
-    Vec3 position, normal, geometric_normal;
-};
-
 // Texels are processed in square tiles: neighbours share cache lines and
 // lights' per-point work, and a tile is the unit of progress and cancel.
 constexpr int kTile = 16;
 
-// The shading point at a covered texel, from its triangle and barycentrics
-// (computed when shaded rather than stored: 72 bytes a texel otherwise).
-BakePoint lightmap_point(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth) {
-    const std::uint32_t t = cov.triangle[i];
-    const Vec3 ng = mesh.geometric_normal(t);
-    Vec3 n = smooth ? mesh.shading_normal(t, cov.b1[i], cov.b2[i]) : ng;
-    if (!(length(n) > 0)) n = ng;
-    return {mesh.position(t, cov.b1[i], cov.b2[i]), n, ng};
-}
+// A covered texel's footprint as a Footprint: positions and normals at the
+// barycentrics of texel_footprint (uv_raster.h).
+class TexelFootprint final : public Footprint {
+public:
+    TexelFootprint(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth)
+        : mesh_(mesh), map_(mesh, cov, i), ng_(mesh.geometric_normal(map_.triangle())),
+          smooth_(smooth) {}
+
+    SurfacePoint at(double u, double v) const override {
+        const auto b = map_.barycentrics(u, v);
+        return point(b[0], b[1]);
+    }
+    SurfacePoint centre() const { return at(0.5, 0.5); }
+
+private:
+    SurfacePoint point(double b1, double b2) const {
+        const std::uint32_t t = map_.triangle();
+        Vec3 n = smooth_ ? mesh_.shading_normal(t, b1, b2) : ng_;
+        if (!(length(n) > 0)) n = ng_;
+        return {mesh_.position(t, b1, b2), n, ng_};
+    }
+
+    const Mesh& mesh_;
+    TexelFootprintMap map_;
+    Vec3 ng_;
+    bool smooth_;
+};
 
 // One point per triangle corner, inside its triangle as Cycles places it
 // (vertex bakes are reduced from corners: see vertex_points.h).
-std::vector<BakePoint> corner_points(const Mesh& mesh, bool smooth) {
-    std::vector<BakePoint> points;
+std::vector<SurfacePoint> corner_points(const Mesh& mesh, bool smooth) {
+    std::vector<SurfacePoint> points;
     for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t)
         for (int k = 0; k < 3; ++k) {
             const Vec3 ng = mesh.geometric_normal(t);
@@ -55,11 +68,11 @@ std::vector<BakePoint> corner_points(const Mesh& mesh, bool smooth) {
 }
 
 // Running statistics of one point over passes, beside its running mean (kept
-// in the output image itself, weighted by rounds): Σ rounds_p² · variance_p
-// of luminance, and the rounds done. 12 bytes a point.
+// in the output image itself, weighted by samples): Σ w_p² · variance_p of
+// luminance and Σ w_p, w_p the samples of pass p. 12 bytes a point.
 struct PointState {
     float variance_sum = 0;
-    std::uint32_t rounds = 0;
+    std::uint32_t weight = 0;
     std::uint16_t passes = 0;
     bool done = false;
 };
@@ -69,12 +82,94 @@ struct PointState {
 constexpr int kMinPassesForNoiseTarget = 3;
 
 double relative_error(const PointState& s, const float* mean) {
-    if (s.rounds == 0) return 0;
+    if (s.weight == 0) return 0;
     const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
-    const double var = double(s.variance_sum) / (double(s.rounds) * s.rounds);
+    const double var = double(s.variance_sum) / (double(s.weight) * s.weight);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
     return std::sqrt(std::max(0.0, var)) / value;
 }
+
+// How a sample budget splits into rounds: whole rounds of the settings'
+// counts (P samples a round), then — when P does not divide the budget N — one
+// final round holding P + (N mod P) samples, the extra spread over the
+// techniques in proportion to their counts. Every technique keeps at least its
+// own count in that round, so the combination there covers what it covers
+// elsewhere and stays unbiased. A budget below P takes one whole round.
+struct SampleBudget {
+    int per_round = 0;
+    int full_rounds = 1;
+    std::vector<int> last;  // counts of the final round; empty: none
+    int last_samples = 0;
+};
+
+SampleBudget plan_samples(const LightingContext& context, long long samples, int rounds) {
+    SampleBudget b;
+    const std::vector<int>& counts = context.settings.samples;
+    for (int k : context.techniques) b.per_round += counts[k];
+    if (b.per_round <= 0) {
+        // Delta lights only (or nothing): a round is one evaluation of them at
+        // one position of the footprint, and counts as one sample.
+        b.per_round = 1;
+        b.full_rounds = int(std::clamp<long long>(samples > 0 ? samples : rounds, 1, 1LL << 30));
+        return b;
+    }
+    if (samples <= 0) {
+        b.full_rounds = std::max(1, rounds);
+        return b;
+    }
+    const long long P = b.per_round;
+    const long long whole = std::max(1LL, samples / P), rest = samples >= P ? samples % P : 0;
+    b.full_rounds = int(std::min<long long>(whole, 1LL << 30));
+    if (rest == 0) return b;
+    b.full_rounds -= 1;
+    b.last = counts;
+    long long given = 0;
+    for (int k : context.techniques) {
+        const long long extra = rest * counts[k] / P;
+        b.last[k] += int(extra);
+        given += extra;
+    }
+    for (int k : context.techniques)
+        if (given < rest && counts[k] > 0) {
+            ++b.last[k];
+            ++given;
+        }
+    b.last_samples = int(P + rest);
+    return b;
+}
+
+// Predicts a pass's duration from the passes so far as a + b·samples (a: the
+// fixed cost of a pass — solves, thread wake-up), through the last two passes
+// of different sizes, else in proportion to the last one.
+class PassTimer {
+public:
+    void add(double samples, double seconds) {
+        if (n_ > 0 && samples != s_[1]) {
+            s_[0] = s_[1];
+            t_[0] = t_[1];
+        }
+        s_[1] = samples;
+        t_[1] = seconds;
+        ++n_;
+    }
+    // The most samples per point a pass can take in `seconds`.
+    double fit(double seconds) const {
+        if (n_ == 0 || !(s_[1] > 0)) return 0;
+        double b = t_[1] / s_[1], a = 0;
+        if (n_ > 1 && s_[0] != s_[1] && s_[0] > 0) {
+            const double slope = (t_[1] - t_[0]) / (s_[1] - s_[0]);
+            if (slope > 0) {
+                b = slope;
+                a = std::max(0.0, t_[1] - b * s_[1]);
+            }
+        }
+        return b > 0 ? (seconds - a) / b : 0;
+    }
+
+private:
+    double s_[2] = {0, 0}, t_[2] = {0, 0};
+    int n_ = 0;
+};
 
 }  // namespace
 
@@ -125,7 +220,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // Where to shade.
     BakeResult result;
     UvCoverage coverage;
-    std::vector<BakePoint> points;  // vertex bakes only
+    std::vector<SurfacePoint> points;  // vertex bakes only
     if (settings.target == BakeTarget::Lightmap) {
         coverage = rasterize_uv(mesh, settings.width, settings.height);
         result.width = settings.width;
@@ -145,27 +240,22 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // Passes: all rounds at once unless a time or noise budget wants to look
     // between passes; then passes double in size (rounds_per_pass, twice that,
     // ...), so budgets are checked often early on and the per-pass cost (one
-    // solve per point) stays small later. Each point's draws continue one
-    // low-discrepancy sequence across passes.
+    // solve per point) stays small later. Every pass reaches every point: a
+    // time budget ends on whole passes (the first always completes; the last
+    // shrinks to what the measured cost says fits), so all points end with the
+    // same count. Each point's draws continue one low-discrepancy sequence
+    // across passes.
     const bool progressive = settings.time_budget > 0 || settings.noise_target > 0;
-    const int total_rounds = std::max(1, settings.lighting.rounds);
-    std::vector<int> pass_rounds;
-    for (int done = 0; done < total_rounds;) {
-        const long long doubled = (long long)settings.rounds_per_pass
-                                  << std::min<std::size_t>(pass_rounds.size(), 20);
-        const int size = progressive ? int(std::min<long long>(total_rounds - done, doubled))
-                                     : total_rounds;
-        pass_rounds.push_back(size);
-        done += size;
-    }
-    const int max_passes = int(pass_rounds.size());
     settings.lighting.receiver = scene.mesh_receiver(in.mesh);  // render/receiver.h
     const LightingContext context(scene, settings.lighting);
+    const SampleBudget budget = plan_samples(context, settings.samples, settings.lighting.rounds);
+    const long long samples_per_point =
+        (long long)budget.full_rounds * budget.per_round + budget.last_samples;
 
     std::vector<PointState> state(count);
     result.value.assign(count * 3, 0.f);  // the running means
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
-    std::atomic<bool> cancel{false}, out_of_time{false};
+    std::atomic<bool> cancel{false};
     std::mutex report;
     const int tiles_x = settings.target == BakeTarget::Lightmap
                             ? (result.width + kTile - 1) / kTile
@@ -190,11 +280,12 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     for (std::size_t i = 0; i < count; ++i)
         if (!covered(i)) state[i].done = true;
 
-    // Progress counts shaded points; cancel is checked at every point so a
+    // Progress counts shaded samples; cancel is checked at every point so a
     // request stops the bake within one point's work.
     std::size_t to_shade = 0;
     for (std::size_t i = 0; i < count; ++i) to_shade += covered(i);
-    const double total_work = double(std::max<std::size_t>(1, to_shade)) * total_rounds;
+    const double total_work = double(std::max<std::size_t>(1, to_shade)) *
+                              double(std::max<long long>(1, samples_per_point));
     std::atomic<std::size_t> shaded{0};
     auto report_progress = [&] {
         double fraction = double(shaded.load(std::memory_order_relaxed)) / total_work;
@@ -203,72 +294,149 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
     };
 
-    int pass = 0;
-    BakeStatus status = BakeStatus::Complete;
-    for (; pass < max_passes; ++pass) {
+    // One pass over every point that is not done.
+    struct Pass {
+        int first_round = 0, rounds = 0;
+        const int* counts = nullptr;  // null: the settings' counts
+        std::uint32_t samples = 0;    // per point
+    };
+    // A point's estimate of one pass, before it joins the running mean.
+    struct Shaded {
+        std::size_t i;
+        double value[3];
+        double stream_variance, own_variance;  // luminance
+    };
+    auto shade_point = [&](PointLighting& shader, std::size_t i, const Pass& pass,
+                           std::vector<Shaded>& out) {
+        if (!covered(i) || state[i].done || cancel.load(std::memory_order_relaxed)) return;
+        Shaded r{i, {}, 0, 0};
+        double variance[3], own[3];
+        if (settings.target == BakeTarget::Lightmap) {
+            const TexelFootprint footprint(mesh, coverage, i, settings.smooth_normals);
+            shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint,
+                         r.value, variance, pass.counts, own);
+        } else {
+            shader.shade(i, pass.first_round, pass.rounds, points[i], nullptr, r.value, variance,
+                         pass.counts, own);
+        }
+        r.stream_variance = luminance(Vec3(variance[0], variance[1], variance[2]));
+        r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
+        out.push_back(r);
+        if (progress && (shaded.fetch_add(pass.samples, std::memory_order_relaxed) % 64) <
+                            std::size_t(pass.samples))
+            report_progress();
+    };
+    // A tile's points join their running means. Their variance: the
+    // independent-draw formula (stable per point, but too high for correlated
+    // draws) scaled by the tile's ratio of the streams' honest estimate to it
+    // (many degrees of freedom once pooled over the tile), or the point's own
+    // streams' estimate where that is larger.
+    auto accumulate = [&](const Pass& pass, const std::vector<Shaded>& tile) {
+        double sum_stream = 0, sum_own = 0;
+        for (const Shaded& r : tile) {
+            sum_stream += r.stream_variance;
+            sum_own += r.own_variance;
+        }
+        const bool pooled = sum_own > 0;
+        const double ratio = pooled ? sum_stream / sum_own : 1.0;
+        for (const Shaded& r : tile) {
+            PointState& s = state[r.i];
+            ++s.passes;
+            s.weight += pass.samples;
+            const double weight = double(pass.samples) / s.weight;
+            float* mean = &result.value[3 * r.i];
+            for (int c = 0; c < 3; ++c) mean[c] += float((r.value[c] - mean[c]) * weight);
+            // The larger of the two: a tile's ratio comes mostly from its smooth
+            // texels, and would understate a texel whose own streams disagree
+            // more (rare bright samples, a shadow edge).
+            const double variance =
+                pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
+            s.variance_sum += float(double(pass.samples) * pass.samples * variance);
+            // A point whose samples all agreed (nothing seen yet, typically a
+            // shadowed texel that rare samples light) gives no error estimate:
+            // it is not done, but keeps sampling while others still need to.
+            if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
+                s.variance_sum > 0 && relative_error(s, mean) <= settings.noise_target)
+                s.done = true;
+        }
+    };
+    auto run_pass = [&](const Pass& pass) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1),
                           [&](const tbb::blocked_range<std::size_t>& range) {
+            PointLighting& shader = shaders.local();
+            std::vector<Shaded> shaded_tile;
             for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
-                if (settings.time_budget > 0 && elapsed() >= settings.time_budget)
-                    out_of_time = true;
-                if (cancel.load(std::memory_order_relaxed) ||
-                    out_of_time.load(std::memory_order_relaxed))
-                    return;
-                PointLighting& shader = shaders.local();
-                tile_points(tile, [&](std::size_t i) {
-                    PointState& s = state[i];
-                    if (!covered(i) || s.done || cancel.load(std::memory_order_relaxed) ||
-                        out_of_time.load(std::memory_order_relaxed))
-                        return;
-                    // Checked per point: a late pass's tile can take longer than the
-                    // slack a time budget allows.
-                    if (settings.time_budget > 0 && elapsed() >= settings.time_budget) {
-                        out_of_time = true;
-                        return;
-                    }
-                    double value[3], variance[3];
-                    const BakePoint p = settings.target == BakeTarget::Lightmap
-                                            ? lightmap_point(mesh, coverage, i,
-                                                             settings.smooth_normals)
-                                            : points[i];
-                    const int rounds = pass_rounds[pass];
-                    shader.shade(i, int(s.rounds), rounds, p.position, p.normal,
-                                 p.geometric_normal, value, variance);
-                    ++s.passes;
-                    s.rounds += rounds;
-                    const double weight = double(rounds) / s.rounds;
-                    float* mean = &result.value[3 * i];
-                    for (int c = 0; c < 3; ++c) mean[c] += float((value[c] - mean[c]) * weight);
-                    s.variance_sum += float(double(rounds) * rounds *
-                                            luminance(Vec3(variance[0], variance[1], variance[2])));
-                    if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-                        relative_error(s, mean) <= settings.noise_target)
-                        s.done = true;
-                    if (progress && (shaded.fetch_add(rounds, std::memory_order_relaxed) % 64) < std::size_t(rounds))
-                        report_progress();
-                });
+                if (cancel.load(std::memory_order_relaxed)) return;
+                shaded_tile.clear();
+                tile_points(tile,
+                            [&](std::size_t i) { shade_point(shader, i, pass, shaded_tile); });
+                accumulate(pass, shaded_tile);
             }
         });
+    };
+
+    int pass_count = 0, done_rounds = 0;
+    // Under a time budget the first pass — the part a budget cannot cut — is
+    // a single round, so small budgets are not eaten by it.
+    // (Optimal strategies solve per pass, and a one-round solve is poor:
+    // they keep rounds_per_pass.)
+    const bool single_first = settings.time_budget > 0 && !is_optimal(settings.lighting.strategy);
+    int next_rounds = !progressive ? budget.full_rounds
+                      : single_first ? 1
+                                     : settings.rounds_per_pass;
+    bool last_done = budget.last.empty();
+    PassTimer timer;
+    BakeStatus status = BakeStatus::Complete;
+    for (;;) {
+        Pass pass;
+        pass.first_round = done_rounds;
+        if (done_rounds < budget.full_rounds) {
+            pass.rounds = std::min(next_rounds, budget.full_rounds - done_rounds);
+        } else if (!last_done) {
+            pass.rounds = 1;
+            pass.counts = budget.last.data();
+        } else {
+            break;
+        }
+        if (settings.time_budget > 0 && pass_count > 0) {
+            const double fits = timer.fit(settings.time_budget - elapsed());
+            if (!pass.counts)
+                pass.rounds = int(std::min<double>(pass.rounds, fits / budget.per_round));
+            if (pass.rounds < 1 || (pass.counts && fits < budget.last_samples)) {
+                status = BakeStatus::TimeBudget;
+                break;
+            }
+        }
+        pass.samples = pass.counts ? std::uint32_t(budget.last_samples)
+                                   : std::uint32_t(pass.rounds * budget.per_round);
+        const double pass_start = elapsed();
+        run_pass(pass);
+        timer.add(pass.samples, elapsed() - pass_start);
+        ++pass_count;
         if (cancel) {
             status = BakeStatus::Cancelled;
             break;
         }
-        if (out_of_time) {
-            status = BakeStatus::TimeBudget;
-            ++pass;  // the interrupted pass counts
-            break;
-        }
+        if (pass.counts) last_done = true;
+        done_rounds += pass.rounds;
+        // Doubling keeps the per-pass cost small; under a noise target passes
+        // grow by half only, so a texel overshoots its target by at most
+        // √1.5 ≈ 1.22 in error.
+        const double growth = settings.noise_target > 0 ? 1.5 : 2.0;
+        next_rounds = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
         if (settings.noise_target > 0 &&
-            std::all_of(state.begin(), state.end(), [&](const PointState& s) { return s.done; })) {
+            std::all_of(state.begin(), state.end(), [&](const PointState& s) {
+                return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance_sum == 0);
+            })) {
             status = BakeStatus::NoiseTarget;
-            ++pass;
             break;
         }
     }
-
     // Outputs, then the margin around UV islands.
     result.noise.assign(count, 0.f);
     result.mask.assign(count, 0.f);
+    result.samples.assign(count, 0);
+    for (std::size_t i = 0; i < count; ++i) result.samples[i] = state[i].weight;
     BakeStats& stats = result.stats;
     double sum_error = 0, sum_passes = 0;
     std::size_t n_covered = 0;
@@ -301,7 +469,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         stats.mis_systems += s.counters.systems;
     }
     stats.status = status;
-    stats.passes = pass;
+    stats.passes = pass_count;
     stats.texels = count;
     stats.covered = n_covered;
     stats.degenerate_uv_triangles = coverage.degenerate_uv_triangles;

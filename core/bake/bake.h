@@ -17,10 +17,12 @@ enum class BakeStatus { Complete, TimeBudget, NoiseTarget, Cancelled };
 const char* bake_status_name(BakeStatus status);
 
 struct BakeSettings {
-    // Techniques, samples per round, strategy, seed. `lighting.rounds` is the
-    // sample budget: at most that many rounds per texel. Empty techniques:
-    // the effect plan's default choice.
+    // Techniques, samples per round, strategy, seed. Empty techniques: the
+    // effect plan's default choice. The sample budget: `samples` per texel
+    // exactly when > 0 (whole rounds plus one final round holding the rest;
+    // at least one round), else `lighting.rounds` rounds.
     DirectLightingSettings lighting;
+    long long samples = 0;
     BakeTarget target = BakeTarget::Lightmap;
     std::uint32_t mesh = 0;
     int width = 0, height = 0;  // lightmap size
@@ -29,9 +31,11 @@ struct BakeSettings {
     bool smooth_normals = true; // interpolate corner normals (else flat)
     double time_budget = 0;     // seconds; 0 = none
     double noise_target = 0;    // relative standard error per texel; 0 = none
-    // Rounds per pass when a time or noise budget asks for progressive
-    // passes. Each pass is one independent estimate per texel (its own
-    // solve); passes are averaged.
+    // Rounds of the first pass when a noise target asks for progressive
+    // passes (later passes grow); under a time budget the first pass is one
+    // round for the heuristics (optimal strategies solve per pass and keep
+    // this many). Each pass is one estimate per
+    // texel (its own solve); passes are averaged, weighted by samples.
     int rounds_per_pass = 4;
     int threads = 0;            // worker threads; 0 = all cores
 };
@@ -56,6 +60,7 @@ struct BakeResult {
     std::vector<float> value;   // width·height·3, E/π, row 0 at the bottom
     std::vector<float> noise;   // width·height, estimated relative standard error
     std::vector<float> mask;    // width·height, 1 where baked, 0 margin or empty
+    std::vector<std::uint32_t> samples;  // width·height, samples taken (0 off the islands)
     BakeStats stats;
 };
 

@@ -98,6 +98,46 @@ UvCoverage rasterize_uv(const Mesh& mesh, int width, int height) {
     return c;
 }
 
+namespace {
+
+// Mirror repeat into [0, max]: a coordinate past the triangle's edge comes back
+// inside instead of piling up on the edge (as Cycles' bake_clamp_mirror_repeat).
+double mirror_clamp(double u, double max) {
+    if (!(max > 0)) return 0;
+    const double t = u / max, whole = std::floor(t), frac = t - whole;
+    return (static_cast<long long>(whole) & 1 ? 1 - frac : frac) * max;
+}
+
+}  // namespace
+
+TexelFootprintMap::TexelFootprintMap(const Mesh& mesh, const UvCoverage& cov, std::size_t texel)
+    : triangle_(cov.triangle.at(texel)) {
+    if (triangle_ == kNoTriangle)
+        throw std::invalid_argument("texel: " + std::to_string(texel) + " is not covered");
+    // As Cycles: a and b are the weights of corners 0 and 1 (corner 2 is the
+    // origin). Their derivatives per texel step are the inverse of the UV
+    // triangle's Jacobian in texel units, halved as Blender's
+    // bake_differentials does (so the box is half a texel wide).
+    a_ = 1.0 - double(cov.b1[texel]) - double(cov.b2[texel]);
+    b_ = cov.b1[texel];
+    const auto& uv0 = mesh.corner_uvs[3 * triangle_];
+    const auto& uv1 = mesh.corner_uvs[3 * triangle_ + 1];
+    const auto& uv2 = mesh.corner_uvs[3 * triangle_ + 2];
+    const double e0x = (uv0[0] - uv2[0]) * cov.width, e0y = (uv0[1] - uv2[1]) * cov.height;
+    const double e1x = (uv1[0] - uv2[0]) * cov.width, e1y = (uv1[1] - uv2[1]) * cov.height;
+    const double scale = kTexelFootprintScale / (e0x * e1y - e0y * e1x);  // non-zero: covers a centre
+    dadx_ = e1y * scale;
+    dady_ = -e1x * scale;
+    dbdx_ = -e0y * scale;
+    dbdy_ = e0x * scale;
+}
+
+std::array<double, 2> TexelFootprintMap::barycentrics(double u, double v) const {
+    const double a = mirror_clamp(a_ + dadx_ * (u - 0.5) + dady_ * (v - 0.5), 1.0);
+    const double b = mirror_clamp(b_ + dbdx_ * (u - 0.5) + dbdy_ * (v - 0.5), 1.0 - a);
+    return {b, std::max(0.0, 1.0 - a - b)};
+}
+
 std::vector<std::int64_t> margin_sources(const UvCoverage& c, int margin) {
     const int W = c.width, H = c.height;
     std::vector<std::int64_t> source(std::size_t(W) * H, -1);

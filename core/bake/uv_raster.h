@@ -4,6 +4,7 @@
 // Blender stores image pixels).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -33,6 +34,30 @@ struct UvCoverage {
 // double coverage along shared edges. Throws std::invalid_argument when the
 // mesh has no UVs or the size is unusable.
 UvCoverage rasterize_uv(const Mesh& mesh, int width, int height);
+
+// Width of a texel's footprint in texels. Blender computes the texel
+// differentials it hands to Cycles' bake with a factor ½
+// (render/intern/bake.cc, bake_differentials), so Cycles box-filters over
+// the central half-texel square; omis follows it to bake the same quantity.
+constexpr double kTexelFootprintScale = 0.5;
+
+// A covered texel's footprint, as Cycles' bake samples it
+// (kernel/integrator/init_from_bake.h, 3.4): a square around the texel centre
+// (kTexelFootprintScale texels wide) through the centre's barycentrics plus
+// the differentials times (u − ½, v − ½), mirror-clamped back into the same
+// triangle. Unlike Cycles, no sample is forced to the centre, so a mean over
+// uniform (u, v) is the box-filtered value at every sample count.
+class TexelFootprintMap {
+public:
+    TexelFootprintMap(const Mesh& mesh, const UvCoverage& coverage, std::size_t texel);
+    // (b1, b2) for (u, v) in [0, 1]²; (½, ½) is the texel centre.
+    std::array<double, 2> barycentrics(double u, double v) const;
+    std::uint32_t triangle() const { return triangle_; }
+
+private:
+    std::uint32_t triangle_;
+    double a_, b_, dadx_, dady_, dbdx_, dbdy_;  // weights of corners 0 and 1
+};
 
 // Extends covered texels into uncovered ones up to `margin` texels away
 // (Chebyshev distance, as repeated 8-neighbour dilation), each filled texel

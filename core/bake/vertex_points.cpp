@@ -43,6 +43,7 @@ BakeResult corners_to_vertices(const Mesh& mesh, BakeResult corners) {
     out.value.assign(3 * nv, 0.f);
     out.noise.assign(nv, 0.f);
     out.mask.assign(nv, 0.f);
+    out.samples.assign(nv, 0);  // a vertex has taken the samples of all its corners
     std::vector<double> sum(3 * nv, 0.0), var(nv, 0.0);
     std::vector<int> count(nv, 0);
     for (std::uint32_t t = 0; t < mesh.num_triangles(); ++t)
@@ -54,6 +55,7 @@ BakeResult corners_to_vertices(const Mesh& mesh, BakeResult corners) {
             const double sd = double(corners.noise[c]) * luminance(Vec3(rgb[0], rgb[1], rgb[2]));
             var[v] += sd * sd;
             ++count[v];
+            if (c < corners.samples.size()) out.samples[v] += corners.samples[c];
         }
     BakeStats& stats = corners.stats;
     double sum_error = 0;

@@ -15,6 +15,7 @@
 
 #include "math/random.h"
 #include "mis/estimator.h"
+#include "sampling/sequence.h"
 #include "sampling/spherical.h"
 #include "sampling/warp.h"
 #include "scene/ray_offset.h"
@@ -60,8 +61,33 @@ struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
         : p_(context), counters(counters), choices_(context.settings.techniques.size()) {}
 
-    void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
-               const Vec3& ng, double* value, double* variance);
+    void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
+               const Footprint* footprint, const int* counts, double* value, double* variance,
+               double* own_variance);
+
+    // The per-sample loop's pieces (shade): which techniques take part, delta
+    // lights at one position, one sample into its estimators.
+    struct Active {
+        std::vector<int> all, lights;  // technique indices
+        std::uint64_t mask = 0, light_mask = 0;
+    };
+    void choose_active(const SurfacePoint& centre, const Footprint* footprint, Active& active);
+    Vec3 delta_lighting(const SurfacePoint& p, double u);
+    struct Estimators {
+        MisEstimator* main;
+        MisEstimator* hidden;  // null unless lights invisible to BSDF rays are sampled
+    };
+    void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
+                     std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
+                     const Estimators* into, int n_into);
+    // Sum of the estimates (and their own variance estimates, if asked).
+    static Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
+    // The balance heuristic's estimate from the same samples (optimal
+    // strategies: the control-variate form with α = 0).
+    static Vec3 balance_of(const Estimators& e);
+    // Optimal strategies: whether the independent streams say the optimal
+    // estimate is noisier here than the balance heuristic's.
+    bool balance_is_better(const Estimators* per, const int* stream_rounds) const;
 
     struct Integrand {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
@@ -73,10 +99,9 @@ struct PointLighting::Impl {
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
-    void add_delta_lights(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
-                          const Vec3& n, const Vec3& ng, Vec3& total, Vec3& total_variance);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
-                            std::uint64_t mask, const std::vector<int>& active);
+                            std::uint64_t key, const std::vector<int>& active,
+                            const int* counts, bool fresh);
 
     // Spherical rectangles/triangles depend on the point only: build each once
     // per point instead of once per sample and pdf evaluation. (Skipped for
@@ -340,180 +365,321 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
 }
 
 MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
-                                     std::uint64_t mask, const std::vector<int>& active) {
-    auto it = cache.find(mask);
+                                             std::uint64_t key, const std::vector<int>& active,
+                                             const int* counts, bool fresh) {
+    auto it = cache.find(key);
+    if (it != cache.end() && fresh) {
+        cache.erase(it);
+        it = cache.end();
+    }
     if (it == cache.end()) {
-        std::vector<int> counts;
-        for (int k : active) counts.push_back(p_.settings.samples[k]);
-        it = cache.emplace(mask, MisEstimator(p_.settings.strategy, int(active.size()), 3,
-                                              counts, p_.settings.options))
+        std::vector<int> n;
+        for (int k : active) n.push_back(counts[k]);
+        it = cache.emplace(key, MisEstimator(p_.settings.strategy, int(active.size()), 3, n,
+                                             p_.settings.options))
                  .first;
     }
     it->second.reset();
-    ++counters.systems;
     return it->second;
+}
+
+void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footprint* footprint,
+                                        Active& active) {
+    // Light choice (which lights, with what probability) is made once per
+    // point, at its centre — or, where no light applies there, at the first
+    // corner of the footprint where one does — and kept for every sample of
+    // the footprint. A fixed choice is a valid technique at every position:
+    // its density at a sample's own position x_s is Σ_l P(l) p_l(ω | x_s),
+    // which is what technique_pdf evaluates, so the combination stays
+    // unbiased; a light that applies nowhere it was probed is left to the
+    // other techniques there.
+    SurfacePoint probes[5] = {centre, centre, centre, centre, centre};
+    int n_probes = 1;
+    if (footprint)
+        for (double u : {0.0, 1.0})
+            for (double v : {0.0, 1.0}) probes[n_probes++] = footprint->at(u, v);
+    for (int k : p_.techniques) {
+        if (!p_.settings.techniques[k].bsdf) {
+            bool reaches = false;
+            for (int i = 0; i < n_probes && !reaches; ++i)
+                reaches = choose_lights(k, probes[i].x, probes[i].n);
+            if (!reaches) continue;
+            active.lights.push_back(k);
+            active.light_mask |= std::uint64_t(1) << k;
+        }
+        active.all.push_back(k);
+        active.mask |= std::uint64_t(1) << k;
+    }
 }
 
 // Delta lights are not integrated: one shadow ray each when they are few; when
 // they are many (plan.sample_delta_lights), their sum is estimated by drawing
-// delta_samples lights per round from the light tree, each weighted by 1/pmf —
-// unbiased, as Cycles does — and the estimate's variance joins the point's.
-void PointLighting::Impl::add_delta_lights(std::uint64_t stream, int first_round, int rounds,
-                                           const Vec3& x, const Vec3& n, const Vec3& ng,
-                                           Vec3& total, Vec3& total_variance) {
-    const GeometryScene& geometry = p_.scene.geometry();
-    auto visible = [&](const Light& light, const DeltaIllumination& d) {
-        if (!light.cast_shadow || !p_.plan.shadow_rays) return true;
-        ++counters.rays;
-        return !geometry.occluded(offset_ray_origin(x, ng, d.direction), d.direction, 0,
-                                  d.distance);
+// delta_samples lights from the light tree, u rotated over [0, 1) for each,
+// weighted by 1/pmf — unbiased, as Cycles does.
+Vec3 PointLighting::Impl::delta_lighting(const SurfacePoint& p, double u) {
+    auto contribution = [&](std::uint32_t l) {
+        const Light& light = p_.scene.lights()[l];
+        const auto d = delta_illumination(light, p.x, p.n);
+        if (!d) return Vec3();
+        if (light.cast_shadow && p_.plan.shadow_rays) {
+            ++counters.rays;
+            if (p_.scene.geometry().occluded(offset_ray_origin(p.x, p.ng, d->direction),
+                                             d->direction, 0, d->distance))
+                return Vec3();
+        }
+        // E/π for Lambert; other receivers scale it by their closure's ratio.
+        return d->irradiance *
+               (kInvPi * p_.settings.receiver.lambert_ratio(dot(p.n, d->direction)));
     };
-    // E/π for Lambert; other receivers scale it by their closure's ratio.
-    auto delta_factor = [&](const DeltaIllumination& d) {
-        return kInvPi * p_.settings.receiver.lambert_ratio(dot(n, d.direction));
-    };
+    Vec3 total;
     if (!p_.plan.sample_delta_lights) {
-        for (std::uint32_t l : p_.delta) {
-            const Light& light = p_.scene.lights()[l];
-            const auto d = delta_illumination(light, x, n);
-            if (d && visible(light, *d)) total += d->irradiance * delta_factor(*d);
+        for (std::uint32_t l : p_.delta) total += contribution(l);
+        return total;
+    }
+    const int draws = p_.plan.delta_samples;
+    for (int j = 0; j < draws; ++j) {
+        const double uj = u + double(j) / draws;
+        const auto pick =
+            p_.delta_selector.sample(p.x, p.n, uj - std::floor(uj), &delta_memo_);
+        if (pick) total += contribution(pick->light) / pick->pmf;
+    }
+    return total / double(draws);
+}
+
+void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
+                                      const ScrambledSobol& sequence, std::uint32_t index,
+                                      const SurfacePoint& centre, const Footprint* footprint,
+                                      const Estimators* into, int n_into) {
+    ++counters.samples;
+    // Dimension groups of the sequence: 0 footprint position, 1 light
+    // selection, 2 light shape or BSDF direction.
+    SurfacePoint p = centre;
+    if (footprint) {
+        double fu, fv;
+        sequence.get_2d(index, 0, fu, fv);
+        p = footprint->at(fu, fv);
+        ++point_serial_;  // the solid-angle cache holds one position's shapes
+    }
+    const int k = active.all[a];
+    const Technique& t = p_.settings.techniques[k];
+    const int hidden_index =
+        into[0].hidden && !t.bsdf
+            ? int(std::find(active.lights.begin(), active.lights.end(), k) - active.lights.begin())
+            : -1;
+    double u1, u2;
+    sequence.get_2d(index, 2, u1, u2);
+    Vec3 w;
+    bool ok;
+    if (t.bsdf) {
+        w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
+        ok = dot(w, p.n) > 0;
+    } else {
+        const auto light = pick_light(k, p.x, p.n, sequence.get_1d(index, 1));
+        const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
+        ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
+        if (ok) w = s->dir;
+    }
+    // Every technique's density at the sample's own position: the position
+    // density is the same for all of them, so the MIS weights are those of
+    // p_k(ω | x).
+    double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
+    if (ok) {
+        for (std::size_t b = 0; b < active.all.size(); ++b) {
+            pdfs[b] = technique_pdf(active.all[b], p.x, p.n, w);
+            // A light seen edge-on from x_s (a measure-zero configuration)
+            // can give a non-finite density: it cannot produce ω there.
+            if (!std::isfinite(pdfs[b])) pdfs[b] = 0;
+        }
+        ok = pdfs[a] > 0;
+    }
+    if (!ok) {
+        for (int e = 0; e < n_into; ++e) {
+            into[e].main->add_null_sample(int(a));
+            if (hidden_index >= 0) into[e].hidden->add_null_sample(hidden_index);
         }
         return;
     }
-    // A stream of its own (the MIS draws keep theirs), continued across
-    // rounds like them: a randomly shifted golden-ratio sequence.
-    Pcg32 rng = point_stream(p_.settings.seed ^ 0xde17a5a3f1e5ull, stream);
-    const double shift = rng.next_double();
-    const int per_round = p_.plan.delta_samples;
-    const double count = double(per_round) * rounds;
-    Vec3 sum, sum2;
-    for (int r = first_round; r < first_round + rounds; ++r)
-        for (int j = 0; j < per_round; ++j) {
-            const double u = shift + double(r * per_round + j) * 0.6180339887498949;
-            const auto pick = p_.delta_selector.sample(x, n, u - std::floor(u), &delta_memo_);
-            if (!pick) continue;
-            const Light& light = p_.scene.lights()[pick->light];
-            const auto d = delta_illumination(light, x, n);
-            if (!d || !visible(light, *d)) continue;
-            const Vec3 v = d->irradiance * (delta_factor(*d) / pick->pmf);
-            sum += v;
-            sum2 += hadamard(v, v);
-        }
-    const Vec3 mean = sum / count;
-    total += mean;
-    if (count < 2) return;
-    auto variance = [&](double s2, double m) {
-        return std::max(0.0, s2 / count - m * m) / (count - 1);
-    };
-    total_variance += Vec3(variance(sum2.x, mean.x), variance(sum2.y, mean.y),
-                           variance(sum2.z, mean.z));
+    const Integrand f = integrand(p.x, p.n, p.ng, w);
+    const double main_f[3] = {f.main.x, f.main.y, f.main.z};
+    const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
+    std::size_t h = 0;
+    if (hidden_index >= 0)
+        for (std::size_t b = 0; b < active.all.size(); ++b)
+            if (!p_.settings.techniques[active.all[b]].bsdf) hidden_pdfs[h++] = pdfs[b];
+    for (int e = 0; e < n_into; ++e) {
+        into[e].main->add_sample(int(a), pdfs, main_f);
+        if (hidden_index >= 0) into[e].hidden->add_sample(hidden_index, hidden_pdfs, hidden_f);
+    }
+}
+
+Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
+    Vec3 total;
+    for (const MisEstimator* m : {e.main, e.hidden}) {
+        if (!m) continue;
+        const std::vector<double> zero(std::size_t(m->num_techniques()) * m->num_channels(), 0.0);
+        const std::vector<double> r = m->control_variate_estimate(zero);
+        total += Vec3(r[0], r[1], r[2]);
+    }
+    return total;
+}
+
+// With a low-discrepancy sequence the balance heuristic can converge faster
+// than the optimal weights' control variate, whose α is estimated from the
+// same few samples (issue 10: optimal MIS must never lose). The K streams are
+// independent randomizations, so the spread of their estimates measures each
+// estimator's actual error; the point keeps whichever spreads less (luminance,
+// weighted by the streams' rounds). A selection from 4 streams is noisy, but
+// it picks between two unbiased-or-consistent estimates of the same value.
+bool PointLighting::Impl::balance_is_better(const Estimators* per,
+                                            const int* stream_rounds) const {
+    double rounds = 0, mean_o = 0, mean_b = 0;
+    double opt[kSampleStreams], bal[kSampleStreams];
+    for (int s = 0; s < kSampleStreams; ++s) {
+        if (!stream_rounds[s]) continue;
+        opt[s] = luminance(estimate_of(per[s]));
+        bal[s] = luminance(balance_of(per[s]));
+        rounds += stream_rounds[s];
+        mean_o += opt[s] * stream_rounds[s];
+        mean_b += bal[s] * stream_rounds[s];
+    }
+    mean_o /= rounds;
+    mean_b /= rounds;
+    double spread_o = 0, spread_b = 0;
+    for (int s = 0; s < kSampleStreams; ++s) {
+        if (!stream_rounds[s]) continue;
+        spread_o += stream_rounds[s] * (opt[s] - mean_o) * (opt[s] - mean_o);
+        spread_b += stream_rounds[s] * (bal[s] - mean_b) * (bal[s] - mean_b);
+    }
+    return spread_b < spread_o;
+}
+
+Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
+    Vec3 total;
+    for (const MisEstimator* m : {e.main, e.hidden}) {
+        if (!m) continue;
+        const MisResult r = m->result();
+        total += Vec3(r.estimate[0], r.estimate[1], r.estimate[2]);
+        if (variance) *variance += Vec3(r.variance[0], r.variance[1], r.variance[2]);
+    }
+    return total;
 }
 
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
-                                const Vec3& x, const Vec3& n, const Vec3& ng, double* value,
-                                double* variance) {
-    Vec3 total, total_variance;
+                                const SurfacePoint& centre, const Footprint* footprint,
+                                const int* counts_in, double* value, double* variance,
+                                double* own_variance_out) {
+    const int* counts = counts_in ? counts_in : p_.settings.samples.data();
     ++point_serial_;  // invalidates the per-point solid-angle cache
+    Active active;
+    choose_active(centre, footprint, active);
 
-    add_delta_lights(stream, first_round, rounds, x, n, ng, total, total_variance);
+    // Round r belongs to stream r mod K; each (technique, stream) has its own
+    // scrambled sequence, continued from round to round. Delta lights, when
+    // positions vary, take one position per round from a sequence of their own.
+    constexpr int K = kSampleStreams;
+    const std::uint64_t base = mix64(p_.settings.seed ^ mix64(stream));
+    auto sequence = [&](std::size_t k, int s) {
+        return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
+    };
+    const std::size_t delta_group = p_.settings.techniques.size();
+    int stream_rounds[K] = {};
+    for (int r = first_round; r < first_round + rounds; ++r) ++stream_rounds[r % K];
+    const int streams_used = int(std::count_if(stream_rounds, stream_rounds + K,
+                                               [](int m) { return m > 0; }));
+    // Per-stream estimators: for the error when asked (variance not null), and
+    // for the optimal strategies' choice against balance (balance_is_better).
+    const bool by_stream =
+        streams_used >= 2 && (variance || is_optimal(p_.settings.strategy));
 
-    // Which enabled techniques apply here: a light technique needs a light its
-    // sampler can reach from this point.
-    std::vector<int> active, active_lights;
-    std::uint64_t mask = 0, light_mask = 0;
-    for (int k : p_.techniques) {
-        const Technique& t = p_.settings.techniques[k];
-        if (!t.bsdf) {
-            if (!choose_lights(k, x, n)) continue;
-            active_lights.push_back(k);
-            light_mask |= std::uint64_t(1) << k;
-        }
-        active.push_back(k);
-        mask |= std::uint64_t(1) << k;
+    // Estimators: one over all rounds, and one per stream for the error.
+    const bool fresh = counts_in != nullptr;  // counts differ from the cached ones
+    const std::uint64_t fresh_key = fresh ? std::uint64_t(1) << 50 : 0;
+    Estimators all{nullptr, nullptr}, per[K] = {};
+    const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
+    for (int s = -1; s < K && !active.all.empty(); ++s) {
+        if (s >= 0 && (!by_stream || stream_rounds[s] == 0)) continue;
+        const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
+        Estimators& e = s < 0 ? all : per[s];
+        if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
+        e.main = &estimator(main_cache_, key | active.mask, active.all, counts, fresh);
+        if (hidden)
+            e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
+                                  fresh);
     }
 
-    if (!active.empty()) {
-        MisEstimator& est = estimator(main_cache_, mask, active);
-        const bool hidden = p_.plan.bsdf_invisible_lights && !active_lights.empty();
-        MisEstimator* hidden_est = hidden ? &estimator(hidden_cache_, light_mask, active_lights)
-                                          : nullptr;
-        Pcg32 rng = point_stream(p_.settings.seed, stream);
-        const Frame frame(n);
-        double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
-        // Each technique's draws at this point follow a randomly shifted R3
-        // sequence (Roberts 2018; Cranley–Patterson rotation): every draw is
-        // still uniform, so estimates stay unbiased, but the draws of one point
-        // spread evenly over the light and the hemisphere instead of
-        // clustering. Variance estimates, derived as for independent draws,
-        // become conservative.
-        double shift[kMaxMisTechniques][3];
-        for (std::size_t a = 0; a < active.size(); ++a)
-            for (double& s : shift[a]) s = rng.next_double();
-        auto draw = [&](std::size_t a, int index, int dim) {
-            static constexpr double kR3[3] = {0.8191725133961645, 0.6710436067037893,
-                                              0.5497004779019703};
-            const double u = shift[a][dim] + index * kR3[dim];
-            return u - std::floor(u);
-        };
-
-        for (int r = first_round; r < first_round + rounds; ++r) {
-            for (std::size_t a = 0; a < active.size(); ++a) {
-                const int k = active[a];
-                const Technique& t = p_.settings.techniques[k];
-                const int hidden_index = hidden && !t.bsdf
-                    ? int(std::find(active_lights.begin(), active_lights.end(), k) - active_lights.begin())
-                    : -1;
-                for (int j = 0; j < p_.settings.samples[k]; ++j) {
-                    ++counters.samples;
-                    const int index = r * p_.settings.samples[k] + j;
-                    const double u0 = draw(a, index, 0), u1 = draw(a, index, 1),
-                                 u2 = draw(a, index, 2);
-                    Vec3 w;
-                    bool ok;
-                    if (t.bsdf) {
-                        w = frame.to_world(sample_cosine_hemisphere(u1, u2));
-                        ok = dot(w, n) > 0;
-                    } else {
-                        const auto light = pick_light(k, x, n, u0);
-                        const auto s = light ? sample(light->light, t.sampler, x, n, u1, u2)
-                                             : std::nullopt;
-                        ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
-                        if (ok) w = s->dir;
-                    }
-                    if (ok) {
-                        for (std::size_t b = 0; b < active.size(); ++b)
-                            pdfs[b] = technique_pdf(active[b], x, n, w);
-                        ok = pdfs[a] > 0 && std::isfinite(pdfs[a]);
-                    }
-                    if (!ok) {
-                        est.add_null_sample(int(a));
-                        if (hidden_index >= 0) hidden_est->add_null_sample(hidden_index);
-                        continue;
-                    }
-                    const Integrand f = integrand(x, n, ng, w);
-                    const double main_f[3] = {f.main.x, f.main.y, f.main.z};
-                    est.add_sample(int(a), pdfs, main_f);
-                    if (hidden_index >= 0) {
-                        std::size_t h = 0;
-                        for (std::size_t b = 0; b < active.size(); ++b)
-                            if (!p_.settings.techniques[active[b]].bsdf) hidden_pdfs[h++] = pdfs[b];
-                        const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
-                        hidden_est->add_sample(hidden_index, hidden_pdfs, hidden_f);
-                    }
-                }
+    // Delta lights are evaluated once per round where positions vary or lights
+    // are drawn, else once at the centre.
+    const bool delta_per_round =
+        !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
+    Vec3 delta_sum[K], delta_sum2;
+    for (int r = first_round; r < first_round + rounds; ++r) {
+        const int s = r % K;
+        const std::uint32_t round_in_stream = std::uint32_t(r / K);
+        if (delta_per_round) {
+            const ScrambledSobol seq = sequence(delta_group, s);
+            SurfacePoint at = centre;
+            if (footprint) {
+                double fu, fv;
+                seq.get_2d(round_in_stream, 0, fu, fv);
+                at = footprint->at(fu, fv);
             }
+            const Vec3 d = delta_lighting(at, seq.get_1d(round_in_stream, 1));
+            delta_sum[s] += d;
+            delta_sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
         }
-        for (MisEstimator* e : {&est, hidden_est}) {
-            if (!e) continue;
-            const MisResult result = e->result();
-            total += Vec3(result.estimate[0], result.estimate[1], result.estimate[2]);
-            total_variance +=
-                Vec3(result.variance[0], result.variance[1], result.variance[2]);
+        const Estimators into[2] = {all, per[s]};
+        for (std::size_t a = 0; a < active.all.size(); ++a) {
+            const int k = active.all[a];
+            const ScrambledSobol seq = sequence(std::size_t(k), s);
+            for (int j = 0; j < counts[k]; ++j)
+                take_sample(active, a, seq,
+                            round_in_stream * std::uint32_t(p_.settings.samples[k]) + j, centre,
+                            footprint, into, by_stream ? 2 : 1);
         }
+    }
+
+    Vec3 own_variance;
+    Vec3 total = delta_per_round || p_.delta.empty() ? Vec3() : delta_lighting(centre, 0.0);
+    const bool use_balance = !active.all.empty() && by_stream &&
+                             is_optimal(p_.settings.strategy) &&
+                             balance_is_better(per, stream_rounds);
+    if (!active.all.empty()) {
+        const Vec3 optimal = estimate_of(all, &own_variance);
+        total += use_balance ? balance_of(all) : optimal;
+    }
+    Vec3 delta_total;
+    for (const Vec3& d : delta_sum) delta_total += d;
+    total += delta_total / double(rounds);
+    if (rounds > 1) {  // the delta lights' mean over positions, as independent draws
+        const Vec3 m = delta_total / double(rounds);
+        const Vec3 spread = delta_sum2 / double(rounds) - Vec3(m.x * m.x, m.y * m.y, m.z * m.z);
+        own_variance += Vec3(std::max(0.0, spread.x), std::max(0.0, spread.y),
+                             std::max(0.0, spread.z)) / double(rounds - 1);
+    }
+
+    Vec3 error_variance = own_variance;
+    if (by_stream) {
+        // Var(mean) = Σ m_s (e_s − ē)² / ((S − 1) M): the streams' estimates e_s
+        // are independent with variance σ²/m_s.
+        Vec3 e[K], mean;
+        for (int s = 0; s < K; ++s) {
+            if (!stream_rounds[s]) continue;
+            e[s] = delta_sum[s] / double(stream_rounds[s]);
+            if (!active.all.empty()) e[s] += use_balance ? balance_of(per[s]) : estimate_of(per[s]);
+            mean += e[s] * (double(stream_rounds[s]) / rounds);
+        }
+        error_variance = Vec3();
+        for (int s = 0; s < K; ++s) {
+            if (!stream_rounds[s]) continue;
+            const Vec3 d = e[s] - mean;
+            error_variance += Vec3(d.x * d.x, d.y * d.y, d.z * d.z) * double(stream_rounds[s]);
+        }
+        error_variance = error_variance / (double(streams_used - 1) * rounds);
     }
     for (int c = 0; c < 3; ++c) {
         value[c] = total[c];
-        variance[c] = total_variance[c];
+        if (variance) variance[c] = error_variance[c];
+        if (own_variance_out) own_variance_out[c] = own_variance[c];
     }
 }
 
@@ -587,10 +753,19 @@ PointLighting::PointLighting(PointLighting&& other) noexcept
     if (impl_) impl_ = std::make_unique<Impl>(impl_->p_, counters);
 }
 
+void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
+                          const SurfacePoint& centre, const Footprint* footprint,
+                          double value[3], double variance[3], const int* counts,
+                          double own_variance[3]) {
+    impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
+                 own_variance);
+}
+
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
                           const Vec3& n, const Vec3& ng, double value[3],
                           double variance[3]) {
-    impl_->shade(stream, first_round, rounds, x, n, ng, value, variance);
+    impl_->shade(stream, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
+                 variance, nullptr);
 }
 
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,
@@ -615,7 +790,11 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, 0, settings.rounds, x, n, n, value + 3 * i, variance + 3 * i);
+            // Variance as for independent draws: an upper bound for these
+            // correlated ones (the baker pools the streams' honest estimate
+            // over neighbouring texels; lone points have no neighbours).
+            shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr, value + 3 * i,
+                         nullptr, nullptr, variance + 3 * i);
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {

@@ -81,6 +81,26 @@ struct LightingCounters {
     std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;
 };
 
+// A shading point: position, shading normal, geometric normal (places ray
+// origins).
+struct SurfacePoint {
+    Vec3 x, n, ng;
+};
+
+// A region of surface a point's samples spread over (a texel's footprint):
+// maps a 2-D draw in [0,1)² to a surface point, uniformly in the region's
+// own parameter space (UV for texels), as the receiver's box filter.
+class Footprint {
+public:
+    virtual ~Footprint() = default;
+    virtual SurfacePoint at(double u, double v) const = 0;
+};
+
+// Rounds of a point are dealt to this many independently randomized streams
+// (round r to stream r mod kSampleStreams). The spread of the streams'
+// estimates measures the error of correlated low-discrepancy draws honestly.
+constexpr int kSampleStreams = 4;
+
 // Shades one point at a time; one per thread, as it keeps scratch memory.
 class PointLighting {
 public:
@@ -89,14 +109,28 @@ public:
     PointLighting(PointLighting&&) noexcept;
     PointLighting(const PointLighting&) = delete;
 
-    // E/π and its estimated variance (RGB) at x with shading normal n, from
-    // rounds [first_round, first_round + rounds) of this point's draws. Each
-    // technique's draws at a point are one randomly shifted low-discrepancy
-    // (R3) sequence, fixed by (seed, stream): unbiased, far less noisy than
-    // independent draws, and continued — not restarted — when a point is
-    // shaded again with a later first_round. The variance is estimated as for
-    // independent draws, so it is an upper bound. ng, the geometric normal,
-    // places the ray origins.
+    // E/π and the estimated variance of that estimate (RGB) at a point, from
+    // rounds [first_round, first_round + rounds) of its draws. Every sample's
+    // dimensions (footprint position, light selection, light shape or BSDF
+    // direction) come from one Owen-scrambled Sobol' sequence per technique
+    // and stream, fixed by (seed, stream): unbiased, stratified, and
+    // continued — not restarted — by a later first_round. The variance comes
+    // from the spread between the kSampleStreams independent streams when at
+    // least two hold rounds, else from the estimator's own (independent-draw)
+    // formula.
+    // footprint: null = every sample at `centre`; else each sample draws its
+    // own position from it (delta lights then take one position per round).
+    // counts: samples per technique in each of these rounds (null = the
+    // settings' counts); another count vector is meant for a final partial
+    // pass (an exact sample budget). own_variance, if given, receives the
+    // variance as computed for independent draws (many degrees of freedom,
+    // but too high for correlated draws): callers may pool the ratio of the
+    // two over neighbouring points. variance may be null (then the streams
+    // are not compared, which saves their estimators).
+    void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
+               const Footprint* footprint, double value[3], double variance[3],
+               const int* counts = nullptr, double own_variance[3] = nullptr);
+    // A fixed point x with shading normal n and geometric normal ng.
     void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
 

@@ -181,6 +181,7 @@ OMIS_API void omisCommitBake(OMISBake bake) {
         if (per_round <= 0 && !s.lighting.techniques.empty())
             throw std::invalid_argument("counts: at least one technique needs samples");
         s.lighting.rounds = int(std::max<long long>(1, per_round ? b->samples / per_round : 1));
+        s.samples = b->samples;  // exactly this many per texel (omis::BakeSettings::samples)
         if (s.target == omis::BakeTarget::Lightmap && (s.width < 1 || s.height < 1))
             throw std::invalid_argument("width, height: a lightmap bake needs both");
         // Validates the rest (mesh id, UVs, technique list) without shading.

@@ -67,7 +67,15 @@ def test_vertex_and_corner_bakes():
     r = omis.bake_vertices(scene, mesh, samples=2048, techniques="uniform/solid-angle")
     assert r.value.shape == (4, 3)
     sd = r.noise * r.value[:, 0]
-    assert np.all(np.abs(r.value[:, 0] - lambert(pts)) <= 5 * sd)
+    # As Cycles, each corner is shaded 1e-4·max(|p|∞, 1) inside its face, so a
+    # vertex's exact value may differ from lambert() at the vertex by up to the
+    # change of lambert() over that distance.
+    step = 1e-4
+    moved = [lambert(pts + step * np.array(d, float)) for d in
+             ((1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (1, 1, 0), (-1, -1, 0),
+              (1, -1, 0), (-1, 1, 0))]
+    inset = np.max(np.abs(np.array(moved) - lambert(pts)), axis=0)
+    assert np.all(np.abs(r.value[:, 0] - lambert(pts)) <= 5 * sd + inset)
     c = omis.bake_vertices(scene, mesh, domain="CORNER", samples=64)
     assert c.value.shape == (6, 3)
 

@@ -1,0 +1,41 @@
+// One randomized low-discrepancy sequence for every dimension of a sample:
+// Owen-scrambled Sobol' points (Burley 2020, "Practical Hash-based Owen
+// Scrambling"), drawn as independent 2-D (0,2)-sequence pairs and 1-D
+// van der Corput dimensions ("padding", as pbrt-v4's PaddedSobolSampler).
+//
+// Each dimension group (footprint position, light selection, light shape /
+// BSDF direction) hashes its own scramble seed and shuffles the sample index
+// with its own seed, so groups are decorrelated from each other while each
+// keeps its stratification: any 2^m consecutive indices from a multiple of
+// 2^m form a (0,m,2)-net per pair, and every point is uniform on [0,1)^d, so
+// estimates stay unbiased.
+#pragma once
+
+#include <cstdint>
+
+namespace omis {
+
+// Seeds for one stream of samples (one texel and technique and randomization).
+class ScrambledSobol {
+public:
+    explicit ScrambledSobol(std::uint64_t seed);
+
+    // Dimension group `group` (any small integer) of sample `index`.
+    double get_1d(std::uint32_t index, std::uint32_t group) const;
+    void get_2d(std::uint32_t index, std::uint32_t group, double& u, double& v) const;
+
+private:
+    static constexpr std::uint32_t kCachedGroups = 4;
+    std::uint32_t seed(std::uint32_t group, std::uint32_t salt) const;
+    std::uint64_t seed_;
+    std::uint32_t cached_[kCachedGroups][3];  // the seeds of the first groups
+};
+
+// The building blocks, exposed for tests.
+std::uint32_t sobol_dim0(std::uint32_t index);  // bit reversal (van der Corput)
+std::uint32_t sobol_dim1(std::uint32_t index);  // Sobol' second dimension
+// Nested uniform scramble of a 32-bit fixed-point coordinate (Owen): each bit
+// is flipped by a hash of the bits above it.
+std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed);
+
+}  // namespace omis
