@@ -171,7 +171,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         done += size;
     }
     const int max_passes = int(pass_rounds.size());
-    const LightingContext context(scene, settings.lighting);
+    LightingContext context(scene, settings.lighting);
 
     std::vector<PointState> state(count);
     result.value.assign(count * 3, 0.f);  // the running means
@@ -214,6 +214,18 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
     };
 
+    // Inside a point with huge counts: the same checks, progress at most every 50 ms.
+    std::atomic<double> last_report{0};
+    context.keep_going = [&] {
+        const double now = elapsed();
+        if (settings.time_budget > 0 && now >= settings.time_budget) out_of_time = true;
+        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
+            last_report = now;
+            report_progress();
+        }
+        return !cancel.load(std::memory_order_relaxed) && !out_of_time.load(std::memory_order_relaxed);
+    };
+
     int pass = 0;
     BakeStatus status = BakeStatus::Complete;
     for (; pass < max_passes; ++pass) {
@@ -243,8 +255,12 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                                                              settings.smooth_normals)
                                             : points[i];
                     const int rounds = pass_rounds[pass];
-                    shader.shade(i, int(s.rounds), rounds, p.position, p.normal,
-                                 p.geometric_normal, value, variance);
+                    try {
+                        shader.shade(i, int(s.rounds), rounds, p.position, p.normal,
+                                     p.geometric_normal, value, variance);
+                    } catch (const LightingCancelled&) {
+                        return;
+                    }
                     ++s.passes;
                     s.rounds += rounds;
                     const double weight = double(rounds) / s.rounds;

@@ -8,9 +8,11 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include "math/random.h"
@@ -310,6 +312,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                     : -1;
                 for (int j = 0; j < p_.settings.samples[k]; ++j) {
                     ++counters.samples;
+                    // Cancellation within a point (huge counts): see keep_going.
+                    if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
+                        throw LightingCancelled{};
                     const int index = r * p_.settings.samples[k] + j;
                     const double u0 = draw(a, index, 0), u1 = draw(a, index, 1),
                                  u2 = draw(a, index, 2);
@@ -378,6 +383,13 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
     for (int n : s.samples)
         if (n < 0) throw std::invalid_argument("samples: counts must not be negative");
     if (s.rounds < 1) throw std::invalid_argument("rounds: must be at least 1");
+    // Draw indices (round × count + j) and per-point totals are ints.
+    long long per_point = 0;
+    for (int n : s.samples) per_point += (long long)n * s.rounds;
+    if (per_point > std::numeric_limits<int>::max())
+        throw std::invalid_argument("samples: " + std::to_string(per_point) +
+                                    " draws per point (counts × rounds) exceed the limit of " +
+                                    std::to_string(std::numeric_limits<int>::max()));
     for (std::size_t i = 0; i < s.techniques.size(); ++i)
         for (std::size_t j = 0; j < i; ++j)
             if (s.techniques[i] == s.techniques[j])
@@ -419,7 +431,7 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     const DirectLightingSettings& settings, double* value,
                                     double* variance, const ProgressFunction& progress) {
     const auto start = std::chrono::steady_clock::now();
-    const LightingContext context(scene, settings);
+    LightingContext context(scene, settings);
 
     DirectLightingStats stats;
     stats.plan = context.plan;
@@ -428,6 +440,21 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
     std::atomic<bool> cancel{false};
     std::atomic<std::size_t> done{0};
     std::mutex report;
+    // Inside long points: report progress now and then (at most every 50 ms)
+    // and stop once it asks to.
+    std::atomic<double> last_report{0};
+    auto seconds = [&] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    context.keep_going = [&] {
+        const double now = seconds();
+        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
+            std::unique_lock<std::mutex> lock(report, std::try_to_lock);
+            last_report = now;
+            if (lock.owns_lock() && !progress(double(done.load()) / double(count))) cancel = true;
+        }
+        return !cancel.load(std::memory_order_relaxed);
+    };
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16),
                       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -436,7 +463,11 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, 0, settings.rounds, x, n, n, value + 3 * i, variance + 3 * i);
+            try {
+                shader.shade(i, 0, settings.rounds, x, n, n, value + 3 * i, variance + 3 * i);
+            } catch (const LightingCancelled&) {
+                return;
+            }
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {

@@ -65,7 +65,16 @@ public:
     std::vector<int> techniques;  // enabled technique indices
     std::vector<std::uint32_t> integrated, delta;
     std::vector<double> power;  // per light, for `power` selection
+
+    // Polled every few hundred samples inside PointLighting::shade, so a
+    // point with huge counts can still be stopped: returning false makes
+    // shade throw LightingCancelled. Empty: never polled.
+    std::function<bool()> keep_going;
 };
+
+// Thrown by PointLighting::shade when the context's keep_going says stop; the
+// point's outputs are then not written.
+struct LightingCancelled {};
 
 struct LightingCounters {
     std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;
