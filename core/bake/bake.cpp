@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 
@@ -74,9 +75,10 @@ std::vector<BakePoint> vertex_points(const Mesh& mesh, bool corners, bool smooth
 
 // Running statistics of one point over passes, beside its running mean (kept
 // in the output image itself, weighted by rounds): Σ rounds_p² · variance_p
-// of luminance, and the rounds done. 12 bytes a point.
+// of luminance, and the rounds done. 16 bytes a point: the sum is a double,
+// as variances of values beyond ~1e19 overflow a float.
 struct PointState {
-    float variance_sum = 0;
+    double variance_sum = 0;
     std::uint32_t rounds = 0;
     std::uint16_t passes = 0;
     bool done = false;
@@ -91,6 +93,8 @@ double relative_error(const PointState& s, const float* mean) {
     const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
     const double var = double(s.variance_sum) / (double(s.rounds) * s.rounds);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
+    // A mean beyond the float range of the image has no meaningful noise.
+    if (!std::isfinite(value) || !std::isfinite(var)) return std::numeric_limits<double>::infinity();
     return std::sqrt(std::max(0.0, var)) / value;
 }
 
@@ -265,9 +269,10 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
                     s.rounds += rounds;
                     const double weight = double(rounds) / s.rounds;
                     float* mean = &result.value[3 * i];
-                    for (int c = 0; c < 3; ++c) mean[c] += float((value[c] - mean[c]) * weight);
-                    s.variance_sum += float(double(rounds) * rounds *
-                                            luminance(Vec3(variance[0], variance[1], variance[2])));
+                    for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
+                        if (!std::isinf(mean[c])) mean[c] += float((value[c] - mean[c]) * weight);
+                    s.variance_sum += double(rounds) * rounds *
+                                      luminance(Vec3(variance[0], variance[1], variance[2]));
                     if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
                         relative_error(s, mean) <= settings.noise_target)
                         s.done = true;
