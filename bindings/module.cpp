@@ -430,10 +430,12 @@ public:
             const OMISError code = omisGetError(&message);
             std::string text = message ? message : "disk light: error";
             const std::string axes = "axis_u, axis_v: ";
+            const std::string r = "radius: " + std::string(py::repr(py::float_(radius))) + " m";
             const std::size_t verdict = text.find("is too");
             if (text.rfind(axes, 0) == 0 && verdict != std::string::npos)
-                text = "radius: " + std::string(py::repr(py::float_(radius))) + " m " +
-                       text.substr(verdict);
+                text = r + " " + text.substr(verdict);
+            else if (text.rfind("axis_", 0) == 0)
+                text = r + text.substr(text.find(':'));
             raise_error(code, text);
         }
         return id;

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "sampling/irradiance.h"
+#include "scene/ray_offset.h"
 #include "sampling/warp.h"
 
 namespace omis {
@@ -21,6 +22,12 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 
 void require_finite(const Vec3& v, const char* what) {
     if (!isfinite(v)) invalid(what, "is not finite");
+}
+
+// Positions and spans within Embree's range (distances then never overflow).
+void require_traceable(const Vec3& v, const char* what) {
+    require_finite(v, what);
+    if (!traceable(v)) invalid(what, "lies beyond ±1e18 m, outside the range rays can reach");
 }
 
 // Emission at most this large: sample values are squared for the variance
@@ -180,9 +187,9 @@ namespace {
 Light planar_light(LightType type, const char* what, const Vec3& origin, const char* origin_name,
                    const Vec3& a, const char* a_name, const Vec3& b, const char* b_name,
                    const Vec3& radiance, bool two_sided, double spread) {
-    require_finite(origin, origin_name);
-    require_finite(a, a_name);
-    require_finite(b, b_name);
+    require_traceable(origin, origin_name);
+    require_traceable(a, a_name);
+    require_traceable(b, b_name);
     require_emission(radiance, "radiance");
     // Directions and lengths apart, so huge or tiny spans neither overflow
     // nor underflow before the area is judged.
@@ -230,15 +237,14 @@ Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axi
 
 Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
                           const Vec3& radiance, bool two_sided) {
-    require_finite(p0, "triangle");
-    require_finite(p1, "triangle");
-    require_finite(p2, "triangle");
+    require_traceable(p0, "triangle");
+    require_traceable(p1, "triangle");
+    require_traceable(p2, "triangle");
     require_emission(radiance, "radiance");
     // The cross product of edges scaled to at most 1, then the scale back.
     const Vec3 e1 = p1 - p0, e2 = p2 - p0;
     const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z),
                                    std::abs(e2.x), std::abs(e2.y), std::abs(e2.z)});
-    require_finite(e1 + e2, "triangle");  // edges of finite corners can still overflow
     const double unit_area = scale > 0 ? 0.5 * length(cross(e1 / scale, e2 / scale)) : 0.0;
     if (!(unit_area > 0)) invalid("triangle light", "has zero area");
     const double area = unit_area * scale * scale;
@@ -252,7 +258,7 @@ Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
 }
 
 Light make_point_light(const Vec3& position, const Vec3& intensity, double radius) {
-    require_finite(position, "position");
+    require_traceable(position, "position");
     require_emission(intensity, "intensity");
     if (!(radius >= 0) || !std::isfinite(radius)) invalid("radius", "must be ≥ 0 and finite");
     if (radius > 0) require_size(kPi * radius * radius, "radius", number(radius) + " m", "area");

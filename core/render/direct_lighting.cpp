@@ -432,6 +432,10 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     double* variance, const ProgressFunction& progress) {
     const auto start = std::chrono::steady_clock::now();
     LightingContext context(scene, settings);
+    for (std::size_t i = 0; i < 3 * count; ++i)  // Embree's range (issue 11)
+        if (!(std::abs(points[i]) <= kLargestTraceableCoordinate))
+            throw std::invalid_argument("points: point " + std::to_string(i / 3) +
+                                        " has a coordinate beyond ±1e18 m (or not finite)");
 
     DirectLightingStats stats;
     stats.plan = context.plan;

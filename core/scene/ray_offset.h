@@ -46,6 +46,15 @@ inline double step_away(double x, double sign) {
 }
 }  // namespace ray_offset_detail
 
+// Embree refuses (asserts on) rays whose origin or direction exceeds its
+// FLT_LARGE = 1.844e18 in any coordinate: points, vertices and light
+// positions stay within this.
+constexpr double kLargestTraceableCoordinate = 1e18;
+
+inline bool traceable(const Vec3& p) {
+    return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) <= kLargestTraceableCoordinate;
+}
+
 // Per-coordinate absolute error bound of a point interpolated from a
 // triangle's vertices with barycentrics b (pbrt: γ·Σ|b_i p_i|).
 inline Vec3 interpolation_error(const Vec3& b, const Vec3& p0, const Vec3& p1, const Vec3& p2) {

@@ -94,7 +94,7 @@ int enum_value(const E& value) {
 }
 
 // The core strategy for a C enum value; std::invalid_argument outside the enum.
-omis::Strategy to_core(OMISStrategy strategy);
+omis::Strategy to_core(const OMISStrategy& strategy);  // by reference: see enum_value
 
 inline void retain(RefCounted* object) { object->references.fetch_add(1); }
 inline void release(RefCounted* object) {

@@ -22,7 +22,7 @@ struct OMISEstimatorImpl : Tagged<0x54534545> {  // "EEST"
     }
 };
 
-omis::Strategy omis::api::to_core(OMISStrategy strategy) {
+omis::Strategy omis::api::to_core(const OMISStrategy& strategy) {
     const int s = enum_value(strategy);
     switch (s) {
         case OMIS_STRATEGY_BALANCE: return omis::Strategy::Balance;

@@ -27,7 +27,7 @@ omis::Vec3 vec3(const double* v, const char* name) {
     return {v[0], v[1], v[2]};
 }
 
-std::size_t scalar_size(OMISDataType data_type) {
+std::size_t scalar_size(const OMISDataType& data_type) {  // by reference: see enum_value
     const int type = enum_value(data_type);
     switch (type) {
         case OMIS_DATA_FLOAT32:

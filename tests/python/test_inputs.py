@@ -104,8 +104,11 @@ def test_lights_at_extreme_sizes_name_the_argument():
     scene = omis.Scene()
     with pytest.raises(ValueError, match=r"radius: 1e-160 m is too small"):
         scene.add_disk_light((0, 0, 1), (0, 0, -1), 1e-160, 1.0)
-    with pytest.raises(ValueError, match="too large"):
+    with pytest.raises(ValueError, match="^radius: 1e[+]200 m: lies beyond"):
         scene.add_disk_light((0, 0, 1), (0, 0, -1), 1e200, 1.0)
+    with pytest.raises(ValueError, match="points: point 1 "):
+        floor, _ = floor_scene()
+        omis.direct_lighting(floor, np.array([[0, 0, 0], [1e300, 0, 0.0]]), np.array([N[0]] * 2))
     with pytest.raises(ValueError, match="radius"):
         scene.add_point_light((0, 0, 1), 1.0, radius=1e-300)
     # Huge and tiny direction vectors are directions.
