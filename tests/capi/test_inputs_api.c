@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "floor_scene.h"
 #include "omis/omis.h"
 
 /* AddressSanitizer reports any read of freed memory, which is what detecting a
@@ -24,19 +25,6 @@ static int error_names(OMISError expected, const char* word) {
         return 0;
     }
     return 1;
-}
-
-static OMISScene floor_scene(void) {
-    const float vertices[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
-    const uint32_t triangles[] = {0, 1, 2, 0, 2, 3};
-    const float uvs[] = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
-    const double corner[3] = {-0.5, -0.5, 1}, u[3] = {0, 1, 0}, v[3] = {1, 0, 0};
-    const double radiance[3] = {1, 1, 1};
-    OMISScene scene = omisNewScene();
-    omisSceneAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL, uvs, NULL);
-    omisSceneAddRectLight(scene, corner, u, v, radiance, false, 3.14159265358979);
-    omisCommitScene(scene);
-    return scene;
 }
 
 static void enums_out_of_range(OMISScene scene) {
@@ -127,7 +115,8 @@ static void foreign_and_released_handles(OMISScene scene) {
 }
 
 int main(void) {
-    OMISScene scene = floor_scene();
+    OMISScene scene = floor_scene(1);
+    omisCommitScene(scene);
     enums_out_of_range(scene);
     bake_options_checked_at_commit(scene);
     estimator_committed_once();
