@@ -888,8 +888,9 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
             if (t.samples[k] < 0) bad("counts", "entry " + std::to_string(k) + " is negative");
             per_round += t.samples[k];
         }
-        // samples is the per-texel budget, spent in whole rounds of sum(counts).
-        if (per_round > o.samples)
+        // samples is the per-texel budget, spent in whole rounds of sum(counts);
+        // counts the caller wrote must fit it (default counts: at least one round).
+        if (!o.counts.is_none() && per_round > o.samples)
             bad("samples", "the budget of " + std::to_string(o.samples) +
                                " per texel is less than one round of counts (" +
                                std::to_string(per_round) + "); raise samples or lower counts");
@@ -1066,7 +1067,8 @@ return_stats=True.)doc");
 
 techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
 of each technique per round (1 each by default); samples: the sample budget per
-texel. time_budget (s) and noise_target (relative standard error) stop the bake
+texel, spent in whole rounds of sum(counts) (rounded down, at least one round; given
+counts whose round exceeds samples are an error). time_budget (s) and noise_target (relative standard error) stop the bake
 earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
 raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: worker
 threads (0 = all cores); results do not depend on it.)doc");
