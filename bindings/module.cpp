@@ -57,6 +57,38 @@ void raise_if_pending() {
     throw py::value_error(argument + ": " + problem);
 }
 
+std::string type_name(const py::handle& obj) {
+    return py::str(py::type::handle_of(obj).attr("__name__"));
+}
+
+// Keyword values checked here, so a wrong type names the argument instead of
+// pybind11's "Unable to cast Python instance to C++ type".
+bool bool_arg(const py::handle& obj, const char* name) {
+    if (py::isinstance<py::bool_>(obj)) return obj.cast<bool>();
+    if (type_name(obj) == "bool_") return py::bool_(py::reinterpret_borrow<py::object>(obj));
+    throw py::type_error(std::string(name) + ": expected True or False, got " + type_name(obj));
+}
+
+double number_arg(const py::handle& obj, const char* name) {
+    if (py::isinstance<py::bool_>(obj) || !PyNumber_Check(obj.ptr()) ||
+        PyComplex_Check(obj.ptr()) || py::isinstance<py::array>(obj))
+        throw py::type_error(std::string(name) + ": expected a real number, got " +
+                             type_name(obj));
+    const double v = PyFloat_AsDouble(obj.ptr());
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        throw py::type_error(std::string(name) + ": expected a real number, got " +
+                             type_name(obj));
+    }
+    return v;
+}
+
+// A string for the C ABI, which would stop at an embedded NUL ('a\0.exr' → 'a').
+const char* c_string(const std::string& text, const char* name) {
+    if (text.find('\0') != std::string::npos) bad(name, "contains a NUL byte");
+    return text.c_str();
+}
+
 std::string shape_of(const py::array& a) {
     std::string s = "(";
     for (py::ssize_t i = 0; i < a.ndim(); ++i)
@@ -99,7 +131,7 @@ py::object combine(const py::handle& f_in, const py::handle& pdfs_in,
                    const py::handle& technique_in, const py::handle& counts_in,
                    const std::string& strategy_name, const py::kwargs& options) {
     OMISStrategy strategy;
-    if (!omisParseStrategy(strategy_name.c_str(), &strategy))
+    if (!omisParseStrategy(c_string(strategy_name, "strategy"), &strategy))
         bad("strategy", "unknown strategy '" + strategy_name +
                             "' (balance, power, maximum, cutoff, optimal-direct, "
                             "optimal-progressive)");
@@ -108,9 +140,9 @@ py::object combine(const py::handle& f_in, const py::handle& pdfs_in,
     for (const auto& item : options) {
         const std::string key = py::str(item.first);
         if (key == "return_variance")
-            return_variance = item.second.cast<bool>();
+            return_variance = bool_arg(item.second, "return_variance");
         else if (key == "beta" || key == "cutoff")
-            float_options.emplace_back(key, item.second.cast<double>());
+            float_options.emplace_back(key, number_arg(item.second, key.c_str()));
         else
             throw py::type_error("combine() got an unexpected keyword argument '" + key + "'");
     }
@@ -376,8 +408,12 @@ public:
                                 const py::handle& radiance, bool two_sided, double spread) {
         const Triple c = triple(center, "center"), L = triple(radiance, "radiance", true);
         Triple n = triple(normal, "normal");
+        // Scaled by the largest component first: huge or tiny normals are fine.
+        const double largest = std::max({std::abs(n[0]), std::abs(n[1]), std::abs(n[2])});
+        if (!(largest > 0) || !std::isfinite(largest))
+            bad("normal", "must have a finite, non-zero length");
+        for (double& x : n) x /= largest;
         const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(len > 0) || !std::isfinite(len)) bad("normal", "must have a finite, non-zero length");
         for (double& x : n) x /= len;
         if (!(radius > 0) || !std::isfinite(radius)) bad("radius", "must be positive and finite");
         // Semi-axes s, t with s × t = n (Duff et al. 2017): the disk emits along n.
@@ -385,8 +421,24 @@ public:
         const double a = -1.0 / (sign + n[2]), b = n[0] * n[1] * a;
         const Triple s{radius * (1 + sign * n[0] * n[0] * a), radius * sign * b, -radius * sign * n[0]};
         const Triple t{radius * b, radius * (sign + n[1] * n[1] * a), -radius * n[1]};
-        return checked_id(omisSceneAddEllipseLight(get(), c.data(), s.data(), t.data(), L.data(),
-                                                   two_sided, finite(spread, "spread")));
+        const unsigned int id = omisSceneAddEllipseLight(get(), c.data(), s.data(), t.data(),
+                                                         L.data(), two_sided,
+                                                         finite(spread, "spread"));
+        if (id == OMIS_INVALID_ID) {
+            // The core judges the semi-axes this function made from `radius`.
+            const char* message = nullptr;
+            const OMISError code = omisGetError(&message);
+            std::string text = message ? message : "disk light: error";
+            const std::string axes = "axis_u, axis_v: ";
+            const std::string r = "radius: " + std::string(py::repr(py::float_(radius))) + " m";
+            const std::size_t verdict = text.find("is too");
+            if (text.rfind(axes, 0) == 0 && verdict != std::string::npos)
+                text = r + " " + text.substr(verdict);
+            else if (text.rfind("axis_", 0) == 0)
+                text = r + text.substr(text.find(':'));
+            raise_error(code, text);
+        }
+        return id;
     }
 
     unsigned int add_point_light(const py::handle& position, const py::handle& intensity,
@@ -628,7 +680,7 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
                            shape_of(normals));
     const TechniqueArgs t = technique_args(techniques, samples);
     OMISStrategy strategy;
-    if (!omisParseStrategy(strategy_name.c_str(), &strategy))
+    if (!omisParseStrategy(c_string(strategy_name, "strategy"), &strategy))
         bad("strategy", "unknown strategy '" + strategy_name +
                             "' (balance, power, maximum, cutoff, optimal-direct, "
                             "optimal-progressive)");
@@ -710,13 +762,17 @@ public:
         bool ok;
         {
             py::gil_scoped_release release;
-            ok = omisWriteBakeResultEXR(ref_.get(), path.c_str());
+            ok = omisWriteBakeResultEXR(ref_.get(), c_string(path, "path"));
         }
         if (!ok) raise_pending_error();
     }
 
     void write_png(const std::string& path, const std::string& view, const std::string& display,
                    double exposure) const {
+        c_string(path, "path");
+        c_string(view, "view");
+        c_string(display, "display");
+        if (!std::isfinite(exposure)) bad("exposure", "must be a finite number of stops");
         bool ok;
         {
             py::gil_scoped_release release;
@@ -778,6 +834,8 @@ struct BakeOptions {
 
 BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
                     int height, int margin, const BakeOptions& o) {
+    if (!o.progress.is_none() && !PyCallable_Check(o.progress.ptr()))
+        bad("progress", "expected a callable taking the fraction done");
     omis::capi::BakeRef bake(omisNewBake(scene.get(), target, mesh));
     if (!bake) raise_pending_error();
     OMISBake b = bake.get();
@@ -804,16 +862,16 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
     omisSetBakeInt(b, "smoothNormals", o.smooth_normals);
     if (o.threads < 0) bad("threads", "must be ≥ 0 (0 = all cores)");
     omisSetBakeInt(b, "threads", o.threads);
-    omisSetBakeString(b, "strategy", o.strategy.c_str());
+    omisSetBakeString(b, "strategy", c_string(o.strategy, "strategy"));
     omisSetBakeFloat(b, "beta", o.beta);
     omisSetBakeFloat(b, "cutoff", o.cutoff);
     if (!o.time_budget.is_none()) {
-        const double t = o.time_budget.cast<double>();
+        const double t = number_arg(o.time_budget, "time_budget");
         if (!(t > 0) || !std::isfinite(t)) bad("time_budget", "expected seconds > 0, or None");
         omisSetBakeFloat(b, "timeBudget", t);
     }
     if (!o.noise_target.is_none()) {
-        const double t = o.noise_target.cast<double>();
+        const double t = number_arg(o.noise_target, "noise_target");
         if (!(t > 0) || !std::isfinite(t))
             bad("noise_target", "expected a relative standard error > 0, or None");
         omisSetBakeFloat(b, "noiseTarget", t);
@@ -846,6 +904,17 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
             if (message.rfind("samples:", 0) == 0) message = "counts:" + message.substr(8);
             throw py::value_error(message);
         }
+        long long per_round = 0;
+        for (std::size_t k = 0; k < t.samples.size(); ++k) {
+            if (t.samples[k] < 0) bad("counts", "entry " + std::to_string(k) + " is negative");
+            per_round += t.samples[k];
+        }
+        // samples is the per-texel budget, spent in whole rounds of sum(counts);
+        // counts the caller wrote must fit it (default counts: at least one round).
+        if (!o.counts.is_none() && per_round > o.samples)
+            bad("samples", "the budget of " + std::to_string(o.samples) +
+                               " per texel is less than one round of counts (" +
+                               std::to_string(per_round) + "); raise samples or lower counts");
         omisSetBakeString(b, "techniques", t.names.c_str());
         omisSetBakeCounts(b, t.samples.data(), int(t.samples.size()));
     }
@@ -1025,7 +1094,8 @@ return_stats=True.)doc");
 
 techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
 of each technique per round (1 each by default); samples: the sample budget per
-texel. time_budget (s) and noise_target (relative standard error) stop the bake
+texel, spent in whole rounds of sum(counts) (rounded down, at least one round; given
+counts whose round exceeds samples are an error). time_budget (s) and noise_target (relative standard error) stop the bake
 earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
 raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: worker
 threads (0 = all cores); results do not depend on it. margin (texels) and

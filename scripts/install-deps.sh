@@ -10,7 +10,7 @@ packages=(
     libopencolorio-dev
     pybind11-dev python3-pybind11 python3-dev python3-numpy
     catch2
-    python3-pytest python3-matplotlib
+    python3-pytest python3-matplotlib python3-hypothesis
     blender xvfb xauth
 )
 

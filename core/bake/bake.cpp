@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <stdexcept>
 
@@ -69,9 +70,10 @@ std::vector<SurfacePoint> corner_points(const Mesh& mesh, bool smooth) {
 
 // Running statistics of one point over passes, beside its running mean (kept
 // in the output image itself, weighted by samples): Σ w_p² · variance_p of
-// luminance and Σ w_p, w_p the samples of pass p. 12 bytes a point.
+// luminance and Σ w_p, w_p the samples of pass p. 16 bytes a point: the sum is
+// a double, as variances of values beyond ~1e19 overflow a float.
 struct PointState {
-    float variance_sum = 0;
+    double variance_sum = 0;
     std::uint32_t weight = 0;
     std::uint16_t passes = 0;
     bool done = false;
@@ -86,6 +88,8 @@ double relative_error(const PointState& s, const float* mean) {
     const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
     const double var = double(s.variance_sum) / (double(s.weight) * s.weight);
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
+    // A mean beyond the float range of the image has no meaningful noise.
+    if (!std::isfinite(value) || !std::isfinite(var)) return std::numeric_limits<double>::infinity();
     return std::sqrt(std::max(0.0, var)) / value;
 }
 
@@ -247,7 +251,7 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     // across passes.
     const bool progressive = settings.time_budget > 0 || settings.noise_target > 0;
     settings.lighting.receiver = scene.mesh_receiver(in.mesh);  // render/receiver.h
-    const LightingContext context(scene, settings.lighting);
+    LightingContext context(scene, settings.lighting);
     const SampleBudget budget = plan_samples(context, settings.samples, settings.lighting.rounds);
     const long long samples_per_point =
         (long long)budget.full_rounds * budget.per_round + budget.last_samples;
@@ -294,6 +298,18 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
     };
 
+    // Inside a point with huge counts: the cancel check, and progress at most
+    // every 50 ms (time budgets end on whole passes, never inside a point).
+    std::atomic<double> last_report{0};
+    context.keep_going = [&] {
+        const double now = elapsed();
+        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
+            last_report = now;
+            report_progress();
+        }
+        return !cancel.load(std::memory_order_relaxed);
+    };
+
     // One pass over every point that is not done.
     struct Pass {
         int first_round = 0, rounds = 0;
@@ -311,13 +327,17 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         if (!covered(i) || state[i].done || cancel.load(std::memory_order_relaxed)) return;
         Shaded r{i, {}, 0, 0};
         double variance[3], own[3];
-        if (settings.target == BakeTarget::Lightmap) {
-            const TexelFootprint footprint(mesh, coverage, i, settings.smooth_normals);
-            shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint,
-                         r.value, variance, pass.counts, own);
-        } else {
-            shader.shade(i, pass.first_round, pass.rounds, points[i], nullptr, r.value, variance,
-                         pass.counts, own);
+        try {
+            if (settings.target == BakeTarget::Lightmap) {
+                const TexelFootprint footprint(mesh, coverage, i, settings.smooth_normals);
+                shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint,
+                             r.value, variance, pass.counts, own);
+            } else {
+                shader.shade(i, pass.first_round, pass.rounds, points[i], nullptr, r.value,
+                             variance, pass.counts, own);
+            }
+        } catch (const LightingCancelled&) {
+            return;  // context.keep_going: the bake is being cancelled
         }
         r.stream_variance = luminance(Vec3(variance[0], variance[1], variance[2]));
         r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
@@ -345,13 +365,14 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
             s.weight += pass.samples;
             const double weight = double(pass.samples) / s.weight;
             float* mean = &result.value[3 * r.i];
-            for (int c = 0; c < 3; ++c) mean[c] += float((r.value[c] - mean[c]) * weight);
+            for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
+                if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
             // The larger of the two: a tile's ratio comes mostly from its smooth
             // texels, and would understate a texel whose own streams disagree
             // more (rare bright samples, a shadow edge).
             const double variance =
                 pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
-            s.variance_sum += float(double(pass.samples) * pass.samples * variance);
+            s.variance_sum += double(pass.samples) * pass.samples * variance;
             // A point whose samples all agreed (nothing seen yet, typically a
             // shadowed texel that rare samples light) gives no error estimate:
             // it is not done, but keeps sampling while others still need to.

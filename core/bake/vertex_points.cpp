@@ -52,7 +52,10 @@ BakeResult corners_to_vertices(const Mesh& mesh, BakeResult corners) {
             if (corners.mask[c] <= 0) continue;
             const float* rgb = &corners.value[3 * c];
             for (int ch = 0; ch < 3; ++ch) sum[3 * v + ch] += rgb[ch];
-            const double sd = double(corners.noise[c]) * luminance(Vec3(rgb[0], rgb[1], rgb[2]));
+            // A corner whose mean overflowed the float range (infinite) has no
+            // meaningful spread: 0 there, not 0 × ∞.
+            const double lum = luminance(Vec3(rgb[0], rgb[1], rgb[2]));
+            const double sd = std::isfinite(lum) ? double(corners.noise[c]) * lum : 0.0;
             var[v] += sd * sd;
             ++count[v];
             if (c < corners.samples.size()) out.samples[v] += corners.samples[c];

@@ -367,9 +367,19 @@ unsigned char to_byte(float v) {
     return static_cast<unsigned char>(255.0f * v + 0.5f);
 }
 
+// The file system stops a name at a NUL byte: 'a\0.exr' would silently
+// write 'a'.
+void check_path(const char* writer, const std::string& path) {
+    if (path.find('\0') != std::string::npos)
+        throw std::invalid_argument(std::string(writer) + ": path " +
+                                    quoted(path.substr(0, path.find('\0'))) +
+                                    "... contains a NUL byte");
+}
+
 }  // namespace
 
 void write_exr(const std::string& path, const ImageChannels& image) {
+    check_path("write_exr", path);
     check_size("write_exr", image.width, image.height);
     const std::size_t channels = image.names.size();
     if (channels == 0) throw std::invalid_argument("write_exr: no channel names");
@@ -403,7 +413,10 @@ void write_exr(const std::string& path, const ImageChannels& image) {
 
 void write_png(const std::string& path, int width, int height, const float* rgb,
                const DisplaySettings& display) {
+    check_path("write_png", path);
     check_size("write_png", width, height);
+    if (!std::isfinite(display.exposure))
+        throw std::invalid_argument("write_png: exposure must be a finite number of stops");
     if (!rgb) throw std::invalid_argument("write_png: rgb is null");
     const std::size_t values = std::size_t(width) * std::size_t(height) * 3;
     std::vector<float> encoded(rgb, rgb + values);

@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
 #include "sampling/irradiance.h"
+#include "scene/ray_offset.h"
 #include "sampling/warp.h"
 
 namespace omis {
@@ -22,9 +24,53 @@ void require_finite(const Vec3& v, const char* what) {
     if (!isfinite(v)) invalid(what, "is not finite");
 }
 
+// Positions and spans within Embree's range (distances then never overflow).
+void require_traceable(const Vec3& v, const char* what) {
+    require_finite(v, what);
+    if (!traceable(v)) invalid(what, "lies beyond ±1e18 m, outside the range rays can reach");
+}
+
+// Emission at most this large: sample values are squared for the variance
+// and the optimal-MIS moments (the estimator refuses values beyond 1e140).
+constexpr double kLargestEmission = 1e100;
+
+std::string number(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+// A light's size (m², or sr for the sun): its square and its reciprocal
+// square must stay finite, as samplers and pdfs use both.
+constexpr double kLargestSize = 1e150, kSmallestSize = 1e-150;
+
+void require_size(double size, const char* what, const std::string& given,
+                  const char* measure) {
+    if (!(size <= kLargestSize))
+        invalid(what, given + " is too large to represent (" + measure + " overflows)");
+    if (!(size >= kSmallestSize))
+        invalid(what, given + " is too small to represent (" + measure + " underflows)");
+}
+
+// Unit vector along v, scaled first so huge or tiny vectors do not overflow
+// or underflow when squared.
+Vec3 unit_direction(const Vec3& v, const char* what) {
+    require_finite(v, what);
+    const double largest = std::max({std::abs(v.x), std::abs(v.y), std::abs(v.z)});
+    if (!(largest > 0)) invalid(what, "has zero length");
+    return normalize(v / largest);
+}
+
+// Euclidean length without overflow or underflow of the squares.
+double safe_length(const Vec3& v) { return std::hypot(v.x, v.y, v.z); }
+
+
 void require_emission(const Vec3& e, const char* what) {
     require_finite(e, what);
     if (e.x < 0 || e.y < 0 || e.z < 0) invalid(what, "must not be negative");
+    if (std::max({e.x, e.y, e.z}) > kLargestEmission)
+        invalid(what, number(std::max({e.x, e.y, e.z})) + " exceeds the supported " +
+                          number(kLargestEmission));
 }
 
 // Relative tolerance for "perpendicular" edges and axes.
@@ -194,12 +240,20 @@ namespace {
 Light planar_light(LightType type, const char* what, const Vec3& origin, const char* origin_name,
                    const Vec3& a, const char* a_name, const Vec3& b, const char* b_name,
                    const Vec3& radiance, bool two_sided, double spread) {
-    require_finite(origin, origin_name);
-    require_finite(a, a_name);
-    require_finite(b, b_name);
+    require_traceable(origin, origin_name);
+    require_traceable(a, a_name);
+    require_traceable(b, b_name);
     require_emission(radiance, "radiance");
-    if (!(length(cross(a, b)) > 0)) invalid(what, "has zero area");
-    require_perpendicular(a, b, what);
+    // Directions and lengths apart, so huge or tiny spans neither overflow
+    // nor underflow before the area is judged.
+    const double len_a = safe_length(a), len_b = safe_length(b);
+    if (!(len_a > 0 && len_b > 0)) invalid(what, "has zero area");
+    const Vec3 unit_a = unit_direction(a, a_name), unit_b = unit_direction(b, b_name);
+    if (!(length(cross(unit_a, unit_b)) > 0)) invalid(what, "has zero area");
+    require_perpendicular(unit_a, unit_b, what);
+    const double area = (type == LightType::Ellipse ? kPi : 1.0) * len_a * len_b;
+    require_size(area, (std::string(a_name) + ", " + b_name).c_str(),
+                 number(len_a) + " m × " + number(len_b) + " m", "area");
     if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
     Light l;
     l.type = type;
@@ -236,11 +290,18 @@ Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axi
 
 Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
                           const Vec3& radiance, bool two_sided) {
-    require_finite(p0, "triangle");
-    require_finite(p1, "triangle");
-    require_finite(p2, "triangle");
+    require_traceable(p0, "triangle");
+    require_traceable(p1, "triangle");
+    require_traceable(p2, "triangle");
     require_emission(radiance, "radiance");
-    if (!(length(cross(p1 - p0, p2 - p0)) > 0)) invalid("triangle light", "has zero area");
+    // The cross product of edges scaled to at most 1, then the scale back.
+    const Vec3 e1 = p1 - p0, e2 = p2 - p0;
+    const double scale = std::max({std::abs(e1.x), std::abs(e1.y), std::abs(e1.z),
+                                   std::abs(e2.x), std::abs(e2.y), std::abs(e2.z)});
+    const double unit_area = scale > 0 ? 0.5 * length(cross(e1 / scale, e2 / scale)) : 0.0;
+    if (!(unit_area > 0)) invalid("triangle light", "has zero area");
+    const double area = unit_area * scale * scale;
+    require_size(area, "triangle", "an area of " + number(area) + " m²", "area");
     Light l;
     l.type = LightType::Triangle;
     l.triangle = TriangleLight{p0, p1, p2};
@@ -250,9 +311,10 @@ Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
 }
 
 Light make_point_light(const Vec3& position, const Vec3& intensity, double radius) {
-    require_finite(position, "position");
+    require_traceable(position, "position");
     require_emission(intensity, "intensity");
     if (!(radius >= 0) || !std::isfinite(radius)) invalid("radius", "must be ≥ 0 and finite");
+    if (radius > 0) require_size(kPi * radius * radius, "radius", number(radius) + " m", "area");
     Light l;
     l.type = LightType::Point;
     l.position = position;
@@ -264,27 +326,27 @@ Light make_point_light(const Vec3& position, const Vec3& intensity, double radiu
 Light make_spot_light(const Vec3& position, const Vec3& direction, const Vec3& intensity,
                       double radius, double spot_size, double spot_blend) {
     Light l = make_point_light(position, intensity, radius);
-    require_finite(direction, "direction");
-    if (!(length(direction) > 0)) invalid("direction", "has zero length");
+    const Vec3 axis = unit_direction(direction, "direction");
     if (!(spot_size > 0 && spot_size <= kPi)) invalid("spot_size", "must lie in (0, π]");
     if (!(spot_blend >= 0 && spot_blend <= 1)) invalid("spot_blend", "must lie in [0, 1]");
     l.type = LightType::Spot;
-    l.spot_axis = normalize(direction);
+    l.spot_axis = axis;
     l.spot_cos_half = std::cos(0.5 * spot_size);
     l.spot_smooth = (1 - l.spot_cos_half) * spot_blend;
     return l;
 }
 
 Light make_sun_light(const Vec3& direction, const Vec3& irradiance, double angle) {
-    require_finite(direction, "direction");
+    const Vec3 to_sun = -unit_direction(direction, "direction");
     require_emission(irradiance, "irradiance");
-    if (!(length(direction) > 0)) invalid("direction", "has zero length");
     if (!(angle >= 0 && angle < kPi)) invalid("angle", "must lie in [0, π)");
     Light l;
     l.type = LightType::Sun;
-    l.to_sun = -normalize(direction);
+    l.to_sun = to_sun;
     l.emission = irradiance;
-    l.sun_half_angle = 0.5 * angle;
+    // A disc whose angular radius has cosine 1 in double precision is a delta
+    // sun to that precision (the difference is O(angle²) < 1e-16 relative).
+    l.sun_half_angle = std::cos(0.5 * angle) < 1.0 ? 0.5 * angle : 0.0;
     return l;
 }
 

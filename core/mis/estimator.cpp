@@ -105,6 +105,9 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
         if (counts_[k] < 0)
             throw std::invalid_argument("counts: entry " + std::to_string(k) +
                                         " is negative");
+        if (counts_[k] > std::numeric_limits<int>::max() - samples_per_round_)
+            throw std::invalid_argument("counts: the total per round exceeds " +
+                                        std::to_string(std::numeric_limits<int>::max()));
         samples_per_round_ += counts_[k];
         n_dot_n_ += double(counts_[k]) * counts_[k];
     }
@@ -136,41 +139,40 @@ void MisEstimator::reset() {
 
 double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
                         const int* counts, const double* pdfs, int t) {
-    // q_k = n_k p_k, scaled by the largest so powers cannot overflow.
-    double q_max = 0;
-    for (int k = 0; k < N; ++k) q_max = std::max(q_max, counts[k] * pdfs[k]);
-    const double q_t = counts[t] * pdfs[t];
+    // q_k = n_k p_k relative to the largest, so neither the products (pdfs
+    // near the double maximum) nor their powers overflow or underflow.
+    double p_max = 0;
+    for (int k = 0; k < N; ++k) p_max = std::max(p_max, pdfs[k]);
+    if (!(p_max > 0)) return 0.0;
+    double q[kMaxMisTechniques], q_max = 0;
+    for (int k = 0; k < N; ++k) q_max = std::max(q_max, q[k] = counts[k] * (pdfs[k] / p_max));
+    for (int k = 0; k < N; ++k) q[k] /= q_max;
+    const double q_t = q[t];
     switch (strategy) {
         case Strategy::Power: {
+            auto power = [&](double r) {
+                return options.beta == 2.0 ? r * r : std::pow(r, options.beta);
+            };
             double sum = 0;
-            for (int k = 0; k < N; ++k) {
-                const double r = counts[k] * pdfs[k] / q_max;
-                sum += options.beta == 2.0 ? r * r : std::pow(r, options.beta);
-            }
-            const double r_t = q_t / q_max;
-            return (options.beta == 2.0 ? r_t * r_t : std::pow(r_t, options.beta)) / sum;
+            for (int k = 0; k < N; ++k) sum += power(q[k]);
+            return power(q_t) / sum;
         }
         case Strategy::Maximum: {
-            for (int k = 0; k < N; ++k) {
-                const double q_k = counts[k] * pdfs[k];
-                if (q_k > q_t || (q_k == q_t && k < t)) return 0.0;
-            }
+            for (int k = 0; k < N; ++k)
+                if (q[k] > q_t || (q[k] == q_t && k < t)) return 0.0;
             return 1.0;
         }
         case Strategy::Cutoff: {
-            const double threshold = options.cutoff * q_max;
-            if (q_t < threshold) return 0.0;
+            if (q_t < options.cutoff) return 0.0;  // the threshold is cutoff × max q = cutoff
             double sum = 0;
-            for (int k = 0; k < N; ++k) {
-                const double q_k = counts[k] * pdfs[k];
-                if (q_k >= threshold) sum += q_k;
-            }
+            for (int k = 0; k < N; ++k)
+                if (q[k] >= options.cutoff) sum += q[k];
             return q_t / sum;
         }
         default: {  // balance
-            double q = 0;
-            for (int k = 0; k < N; ++k) q += counts[k] * pdfs[k];
-            return q_t / q;
+            double sum = 0;
+            for (int k = 0; k < N; ++k) sum += q[k];
+            return q_t / sum;
         }
     }
 }
@@ -193,38 +195,53 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
                          " in round " + std::to_string(rounds_ + 1) +
                          " than counts allows (" + std::to_string(counts_[t]) +
                          "); samples must come round by round");
-    double q = 0;
+    double p_max = 0;
     for (int k = 0; k < N_; ++k) {
         if (!(pdfs[k] >= 0 && pdfs[k] <= std::numeric_limits<double>::max()))
             throw_bad_sample("pdfs: density of technique " + std::to_string(k) +
                              " is negative or not finite");
-        q += counts_[k] * pdfs[k];
+        p_max = std::max(p_max, pdfs[k]);
     }
     if (!(pdfs[t] > 0))
         throw_bad_sample("pdfs: the sample's own technique " + std::to_string(t) +
                          " has zero density");
     for (int c = 0; c < C_; ++c)
         if (!std::isfinite(f[c])) throw_bad_sample("f: value is not finite");
-    const double inv_q = 1.0 / q;
+    // q = Σ n_k p_k summed relative to the largest pdf: pdfs near the double
+    // maximum would overflow the sum, denormal ones lose their digits.
+    double q_scaled = 0;
+    for (int k = 0; k < N_; ++k) q_scaled += counts_[k] * (pdfs[k] / p_max);
+    auto over_q = [&](double v) { return v / q_scaled / p_max; };
+    // Sample values are squared and summed for the variance and the optimal
+    // moments; beyond this they would overflow.
+    constexpr double kLargestValue = 1e140;
+    for (int c = 0; c < C_; ++c)
+        if (!(std::abs(over_q(f[c])) <= kLargestValue))
+            throw_bad_sample("f, pdfs: f / (Σ counts·pdfs) exceeds 1e140 (values too large "
+                             "or densities too small; its square would overflow)");
 
     if (is_optimal(strategy_)) {
         double r[kMaxMisTechniques], fq[kMaxMisChannels];
-        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] * inv_q;
+        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] / p_max / q_scaled;
         for (int ch = 0; ch < C_; ++ch) {
-            fq[ch] = f[ch] * inv_q;
+            fq[ch] = over_q(f[ch]);
             negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
         }
         moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
     }
 
-    // Y = w_t f / (n_t p_t); for the balance heuristic (and as the balance
-    // contribution of the optimal strategies) that is f/q.
-    const double scale = (strategy_ == Strategy::Balance || is_optimal(strategy_))
-                             ? inv_q
-                             : heuristic_weight(strategy_, options_, N_, counts_.data(), pdfs, t) /
-                                   (counts_[t] * pdfs[t]);
+    // Y = w_t f / (n_t p_t) = (f/q) · w_t / share_t with share_t = n_t p_t / q
+    // (1 for the balance heuristic and the balance contribution of the
+    // optimal strategies); a share that underflows has a zero weight too.
+    double ratio = 1;
+    if (strategy_ != Strategy::Balance && !is_optimal(strategy_)) {
+        const double share = counts_[t] * (pdfs[t] / p_max) / q_scaled;
+        ratio = share > 0
+                    ? heuristic_weight(strategy_, options_, N_, counts_.data(), pdfs, t) / share
+                    : 0.0;
+    }
     for (int c = 0; c < C_; ++c) {
-        const double y = f[c] * scale;
+        const double y = over_q(f[c]) * ratio;
         sum_y_[t * C_ + c] += y;
         sum_y2_[t * C_ + c] += y * y;
     }

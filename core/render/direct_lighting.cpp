@@ -8,9 +8,11 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <mutex>
 #include <optional>
 #include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 #include "math/random.h"
@@ -451,6 +453,9 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const SurfacePoint& centre, const Footprint* footprint,
                                       const Estimators* into, int n_into) {
     ++counters.samples;
+    // Cancellation within a point (huge counts): see keep_going.
+    if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
+        throw LightingCancelled{};
     // Dimension groups of the sequence: 0 footprint position, 1 light
     // selection, 2 light shape or BSDF direction.
     SurfacePoint p = centre;
@@ -697,6 +702,13 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
     for (int n : s.samples)
         if (n < 0) throw std::invalid_argument("samples: counts must not be negative");
     if (s.rounds < 1) throw std::invalid_argument("rounds: must be at least 1");
+    // Draw indices (round × count + j) and per-point totals are ints.
+    long long per_point = 0;
+    for (int n : s.samples) per_point += (long long)n * s.rounds;
+    if (per_point > std::numeric_limits<int>::max())
+        throw std::invalid_argument("samples: " + std::to_string(per_point) +
+                                    " draws per point (counts × rounds) exceed the limit of " +
+                                    std::to_string(std::numeric_limits<int>::max()));
     for (std::size_t i = 0; i < s.techniques.size(); ++i)
         for (std::size_t j = 0; j < i; ++j)
             if (s.techniques[i] == s.techniques[j])
@@ -773,7 +785,11 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     const DirectLightingSettings& settings, double* value,
                                     double* variance, const ProgressFunction& progress) {
     const auto start = std::chrono::steady_clock::now();
-    const LightingContext context(scene, settings);
+    LightingContext context(scene, settings);
+    for (std::size_t i = 0; i < 3 * count; ++i)  // Embree's range (issue 11)
+        if (!(std::abs(points[i]) <= kLargestTraceableCoordinate))
+            throw std::invalid_argument("points: point " + std::to_string(i / 3) +
+                                        " has a coordinate beyond ±1e18 m (or not finite)");
 
     DirectLightingStats stats;
     stats.plan = context.plan;
@@ -782,6 +798,21 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
     std::atomic<bool> cancel{false};
     std::atomic<std::size_t> done{0};
     std::mutex report;
+    // Inside long points: report progress now and then (at most every 50 ms)
+    // and stop once it asks to.
+    std::atomic<double> last_report{0};
+    auto seconds = [&] {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    };
+    context.keep_going = [&] {
+        const double now = seconds();
+        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
+            std::unique_lock<std::mutex> lock(report, std::try_to_lock);
+            last_report = now;
+            if (lock.owns_lock() && !progress(double(done.load()) / double(count))) cancel = true;
+        }
+        return !cancel.load(std::memory_order_relaxed);
+    };
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16),
                       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -793,8 +824,12 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
             // Variance as for independent draws: an upper bound for these
             // correlated ones (the baker pools the streams' honest estimate
             // over neighbouring texels; lone points have no neighbours).
-            shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr, value + 3 * i,
-                         nullptr, nullptr, variance + 3 * i);
+            try {
+                shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr,
+                             value + 3 * i, nullptr, nullptr, variance + 3 * i);
+            } catch (const LightingCancelled&) {
+                return;
+            }
         }
         const std::size_t finished = done.fetch_add(range.size()) + range.size();
         if (progress) {

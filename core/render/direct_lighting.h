@@ -75,7 +75,16 @@ public:
     // estimates their sum by drawing some (plan.sample_delta_lights).
     LightSelector uniform_selector, power_selector, tree_selector, delta_selector;
     const LightSelector* selector(LightSelection selection) const;
+
+    // Polled every few hundred samples inside PointLighting::shade, so a
+    // point with huge counts can still be stopped: returning false makes
+    // shade throw LightingCancelled. Empty: never polled.
+    std::function<bool()> keep_going;
 };
+
+// Thrown by PointLighting::shade when the context's keep_going says stop; the
+// point's outputs are then not written.
+struct LightingCancelled {};
 
 struct LightingCounters {
     std::uint64_t samples = 0, rays = 0, systems = 0, pdf_evaluations = 0;

@@ -4,6 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "scene/ray_offset.h"
+
 namespace omis {
 
 namespace {
@@ -141,9 +143,10 @@ std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
     for (std::size_t i = 0; i < V; ++i) {
         const Vec3 p{in.positions.at(i, 0), in.positions.at(i, 1), in.positions.at(i, 2)};
         if (!isfinite(p)) fail("vertex " + std::to_string(i) + " is not finite: " + fmt(p));
-        // Embree stores floats: a double beyond float range would become Inf.
-        if (std::abs(p.x) > 1e30 || std::abs(p.y) > 1e30 || std::abs(p.z) > 1e30)
-            fail("vertex " + std::to_string(i) + " is out of single-precision range: " + fmt(p));
+        // Embree stores floats and refuses rays beyond its FLT_LARGE (1.8e18).
+        if (!traceable(p))
+            fail("vertex " + std::to_string(i) + " lies beyond ±1e18 m, the range rays reach: " +
+                 fmt(p));
         m.positions[i] = p;
     }
     m.triangles.resize(T);

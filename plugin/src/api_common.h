@@ -3,10 +3,13 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
+#include <cstring>
 #include <exception>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "mis/strategy.h"
 #include "omis/omis.h"
@@ -50,24 +53,61 @@ void guarded_void(Body&& body) {
     });
 }
 
-// Base of every handle: an intrusive reference count.
+// Base of every handle: an intrusive reference count and a tag naming the
+// handle's kind, checked on entry and cleared on release, so a released or
+// foreign handle is reported instead of used — as far as its memory still
+// reads back: after a release that memory may be reused, so use after release
+// stays undefined behaviour that the tag only usually catches.
 struct RefCounted {
     std::atomic<int> references{1};
-    virtual ~RefCounted() = default;
+    std::uint32_t tag = 0;
+    virtual ~RefCounted() { tag = 0; }
 };
+
+// A handle type with its own tag (four ASCII letters).
+template <std::uint32_t Tag>
+struct Tagged : RefCounted {
+    static constexpr std::uint32_t kTag = Tag;
+    Tagged() { tag = Tag; }
+};
+
+// The tag of what may be no handle at all: exempt from UBSan's vptr check,
+// which would flag exactly the misuse this looks for.
+__attribute__((no_sanitize("vptr"))) inline std::uint32_t tag_of(const RefCounted* handle) {
+    return handle->tag;
+}
 
 template <class T>
 T* checked(T* handle, const char* what) {
     if (!handle) throw std::invalid_argument(std::string(what) + ": handle is NULL");
+    if constexpr (std::is_base_of_v<RefCounted, T>) {
+        if (tag_of(handle) != T::kTag)
+            throw std::invalid_argument(std::string(what) +
+                                        ": not a live handle of this kind (released, or foreign)");
+    }
     return handle;
 }
 
+// The integer a C caller passed for an enum. C enums are ints; loading a value
+// outside the C++ enum's range as that enum type is undefined, so the integer
+// is read and checked before any conversion.
+template <class E>
+int enum_value(const E& value) {
+    static_assert(sizeof(E) == sizeof(int), "C enums are int-sized");
+    int v;
+    std::memcpy(&v, &value, sizeof v);
+    return v;
+}
+
 // The core strategy for a C enum value; std::invalid_argument outside the enum.
-omis::Strategy to_core(OMISStrategy strategy);
+omis::Strategy to_core(const OMISStrategy& strategy);  // by reference: see enum_value
 
 inline void retain(RefCounted* object) { object->references.fetch_add(1); }
 inline void release(RefCounted* object) {
-    if (object->references.fetch_sub(1) == 1) delete object;
+    if (object->references.fetch_sub(1) == 1) {
+        object->tag = 0;
+        delete object;
+    }
 }
 
 }  // namespace omis::api

@@ -13,7 +13,7 @@
 
 using namespace omis::api;
 
-struct OMISBakeImpl : RefCounted {
+struct OMISBakeImpl : Tagged<0x454b4142> {  // "BAKE"
     OMISSceneImpl* scene = nullptr;  // retained
     omis::BakeSettings settings;
     std::string techniques, strategy = "optimal-direct";
@@ -33,7 +33,7 @@ struct OMISBakeImpl : RefCounted {
     }
 };
 
-struct OMISBakeResultImpl : RefCounted {
+struct OMISBakeResultImpl : Tagged<0x54534552> {  // "REST"
     omis::BakeResult result;
 };
 
@@ -52,10 +52,9 @@ int to_int(std::int64_t value, const char* name, std::int64_t lo, std::int64_t h
 OMIS_API OMISBake omisNewBake(OMISScene scene, OMISBakeTarget target, unsigned int mesh) {
     return guarded<OMISBake>(nullptr, [&] {
         auto* s = checked(scene, "scene");
-        if (target != OMIS_BAKE_LIGHTMAP && target != OMIS_BAKE_VERTICES &&
-            target != OMIS_BAKE_CORNERS)
-            throw std::invalid_argument("target: unknown bake target " +
-                                        std::to_string(int(target)));
+        const int t = enum_value(target);
+        if (t != OMIS_BAKE_LIGHTMAP && t != OMIS_BAKE_VERTICES && t != OMIS_BAKE_CORNERS)
+            throw std::invalid_argument("target: unknown bake target " + std::to_string(t));
         auto bake = std::make_unique<OMISBakeImpl>();
         bake->settings.target = target == OMIS_BAKE_LIGHTMAP   ? omis::BakeTarget::Lightmap
                                 : target == OMIS_BAKE_VERTICES ? omis::BakeTarget::Vertices
@@ -154,6 +153,14 @@ OMIS_API void omisCommitBake(OMISBake bake) {
         if (!strategy)
             throw std::invalid_argument("strategy: unknown strategy '" + b->strategy + "'");
         s.lighting.strategy = *strategy;
+        // Checked here, not first when the bake runs.
+        const auto& o = s.lighting.options;
+        if (!(o.beta > 0)) throw std::invalid_argument("beta: must be positive");
+        if (!(o.cutoff >= 0 && o.cutoff <= 1)) throw std::invalid_argument("cutoff: must lie in [0, 1]");
+        if (!(s.time_budget >= 0))
+            throw std::invalid_argument("timeBudget: must be ≥ 0 seconds (0 = none)");
+        if (!(s.noise_target >= 0))
+            throw std::invalid_argument("noiseTarget: must be ≥ 0 (0 = none)");
         if (b->techniques.empty()) {
             omis::default_techniques(scene, s.lighting.techniques, s.lighting.samples);
             if (!b->counts.empty())

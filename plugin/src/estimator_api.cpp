@@ -7,7 +7,7 @@
 
 using namespace omis::api;
 
-struct OMISEstimatorImpl : RefCounted {
+struct OMISEstimatorImpl : Tagged<0x54534545> {  // "EEST"
     omis::Strategy strategy;
     int num_techniques, num_channels;
     std::vector<int> counts;
@@ -22,7 +22,8 @@ struct OMISEstimatorImpl : RefCounted {
     }
 };
 
-omis::Strategy omis::api::to_core(OMISStrategy s) {
+omis::Strategy omis::api::to_core(const OMISStrategy& strategy) {
+    const int s = enum_value(strategy);
     switch (s) {
         case OMIS_STRATEGY_BALANCE: return omis::Strategy::Balance;
         case OMIS_STRATEGY_POWER: return omis::Strategy::Power;
@@ -31,7 +32,7 @@ omis::Strategy omis::api::to_core(OMISStrategy s) {
         case OMIS_STRATEGY_OPTIMAL_DIRECT: return omis::Strategy::OptimalDirect;
         case OMIS_STRATEGY_OPTIMAL_PROGRESSIVE: return omis::Strategy::OptimalProgressive;
     }
-    throw std::invalid_argument("strategy: unknown value " + std::to_string(int(s)));
+    throw std::invalid_argument("strategy: unknown value " + std::to_string(s));
 }
 
 OMIS_API bool omisParseStrategy(const char* name, OMISStrategy* strategy) {
@@ -92,6 +93,10 @@ OMIS_API void omisSetEstimatorFloat(OMISEstimator estimator, const char* name, d
 OMIS_API void omisCommitEstimator(OMISEstimator estimator) {
     guarded_void([&] {
         auto* e = checked(estimator, "estimator");
+        if (e->estimator)
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           "estimator: already committed (a second commit would drop its "
+                           "samples; omisResetEstimator starts again)");
         e->estimator = std::make_unique<omis::MisEstimator>(
             e->strategy, e->num_techniques, e->num_channels, e->counts, e->options);
     });

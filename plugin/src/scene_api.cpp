@@ -27,14 +27,15 @@ omis::Vec3 vec3(const double* v, const char* name) {
     return {v[0], v[1], v[2]};
 }
 
-std::size_t scalar_size(OMISDataType type) {
+std::size_t scalar_size(const OMISDataType& data_type) {  // by reference: see enum_value
+    const int type = enum_value(data_type);
     switch (type) {
         case OMIS_DATA_FLOAT32:
             return sizeof(float);
         case OMIS_DATA_FLOAT64:
             return sizeof(double);
     }
-    throw std::invalid_argument("type: unknown data type " + std::to_string(int(type)) +
+    throw std::invalid_argument("type: unknown data type " + std::to_string(type) +
                                 " (OMIS_DATA_FLOAT32 or OMIS_DATA_FLOAT64)");
 }
 

@@ -10,7 +10,7 @@
 #include "render/scene.h"
 #include "render/techniques.h"
 
-struct OMISSceneImpl : omis::api::RefCounted {
+struct OMISSceneImpl : omis::api::Tagged<0x4e454353> {  // "SCEN"
     omis::Scene scene;
     std::mutex build_mutex;              // serialises adds and commit
     std::atomic<bool> committed{false};  // set once commit has finished

@@ -7,19 +7,7 @@
 #include "omis/omis.h"
 
 #include "check.h"
-
-static OMISScene floor_scene(int with_uvs) {
-    const float vertices[] = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
-    const uint32_t triangles[] = {0, 1, 2, 0, 2, 3};
-    const float uvs[] = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
-    const double corner[3] = {-0.5, -0.5, 1}, u[3] = {0, 1, 0}, v[3] = {1, 0, 0};
-    const double radiance[3] = {1, 1, 1};
-    OMISScene scene = omisNewScene();
-    omisSceneAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL,
-                     with_uvs ? uvs : NULL, NULL);
-    omisSceneAddRectLight(scene, corner, u, v, radiance, false, 3.14159265358979);
-    return scene;
-}
+#include "floor_scene.h"
 
 static int progress_calls = 0;
 static bool cancel_at_ten_percent(void* user, double fraction) {

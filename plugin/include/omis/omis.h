@@ -3,8 +3,17 @@
  * The stable plain-C interface to the omis library. Objects are opaque,
  * reference-counted handles: omisNewX creates one with a count of 1,
  * omisRetainX adds a reference, omisReleaseX drops one and frees the object
- * when none is left. Parameters are set, then the object is committed, then it
- * is used; using an uncommitted object is an error.
+ * when none is left. Parameters are set, then the object is committed (once:
+ * a second commit is an error), then it is used; using an uncommitted object
+ * is an error.
+ *
+ * Handles carry a tag checked on entry: NULL, a handle of another kind, a
+ * pointer to something else, or a handle whose last reference was released
+ * gives OMIS_ERROR_INVALID_ARGUMENT ("not a live handle") instead of being
+ * used. Detecting a released handle relies on its freed memory still reading
+ * back as released, which the allocator does not promise: using a handle after
+ * its last release remains undefined behaviour; the check makes it usually an
+ * error. Enum arguments outside their enumeration are errors too.
  *
  * Errors: a failing call returns an "invalid" value (NULL, false, 0) and
  * records an error code and message for the calling thread; omisGetError
