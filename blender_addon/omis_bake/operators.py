@@ -42,7 +42,7 @@ def format_seconds(seconds):
 def accuracy_line(stats):
     """The accuracy reached and what halving it costs, in one sentence."""
     return (f'error {100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
-            f'for 95 % of texels; halving it: about {format_seconds(stats["halving_seconds"])} '
+            f'for 95 % of texels; halving it: at most {format_seconds(stats["halving_seconds"])} '
             f'more')
 
 

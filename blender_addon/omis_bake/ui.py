@@ -115,7 +115,7 @@ def _draw_last(layout, props):
     _figure(box, "Samples per texel", f"{props.last_samples_per_texel:.1f}")
     _figure(box, "Error (mean)", f"{100 * props.last_mean_error:.2f} %")
     _figure(box, "Error (95 % of texels)", f"≤ {100 * props.last_error_p95:.2f} %")
-    _figure(box, "Half the error", f"about {operators.format_seconds(props.last_halving_seconds)}"
+    _figure(box, "Half the error", f"≤ {operators.format_seconds(props.last_halving_seconds)}"
                                    f" more")
 
 
