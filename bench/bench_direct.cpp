@@ -667,7 +667,7 @@ int main(int argc, char** argv) {
     lambert_reference(tilted, kDiningLight);
     std::size_t parallel_ok = 0;
     for (std::size_t i = 0; i < tilted.size(); ++i)
-        parallel_ok += sampler_applies(dining.lights()[0], LightSampler::Parallel,
+        parallel_ok += sampler_applies(dining.lights()[0], ShapeSampler::Parallel,
                                        tilted.point(i), tilted.normal(i));
 
     auto dining_sweep = [](bool with_parallel) {

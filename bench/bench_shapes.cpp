@@ -62,7 +62,7 @@ void compare(const char* name, const Light& l, const Vec3& x, const Vec3& n,
     }
 }
 
-Sampler through(const Light& l, LightSampler s, const Vec3& x, const Vec3& n) {
+Sampler through(const Light& l, ShapeSampler s, const Vec3& x, const Vec3& n) {
     return [&l, s, x, n](double u1, double u2) { return sample_light(l, s, x, n, u1, u2); };
 }
 
@@ -75,21 +75,21 @@ void part_a() {
         const Vec3 x{0.2, 0.1, 0};
         compare("rect 2 m, spread 30°, 0.3 m", l, x, up,
                 {{"whole rect (old)", [&](double a, double b) { return l.rect.sample_solid_angle(x, a, b); }},
-                 {"spread-clamped (new)", through(l, LightSampler::SolidAngle, x, up)}});
+                 {"spread-clamped (new)", through(l, ShapeSampler::SolidAngle, x, up)}});
     }
     {
         const Light l = make_rect_light({1, -1, -0.5}, {0, 0, 2}, {0, 2, 0}, white, false, 10 * deg);
         const Vec3 x{0.2, 0.3, 0.4}, n = normalize(Vec3{1, 0, 0.2});
         compare("wall rect, spread 10°, 0.8 m", l, x, n,
                 {{"whole rect (old)", [&](double a, double b) { return l.rect.sample_solid_angle(x, a, b); }},
-                 {"spread-clamped (new)", through(l, LightSampler::SolidAngle, x, n)}});
+                 {"spread-clamped (new)", through(l, ShapeSampler::SolidAngle, x, n)}});
     }
     {
         const Light l = make_ellipse_light({0, 0, 0.3}, {0, 1, 0}, {1, 0, 0}, white, false, 30 * deg);
         const Vec3 x{0.2, 0.1, 0};
         compare("disk r 1 m, spread 30°, 0.3 m", l, x, up,
                 {{"whole disk, area (old)", [&](double a, double b) { return l.ellipse.sample_area(x, a, b); }},
-                 {"spread-clipped (new)", through(l, LightSampler::SolidAngle, x, up)}});
+                 {"spread-clipped (new)", through(l, ShapeSampler::SolidAngle, x, up)}});
     }
     for (auto [name, r, h, px] : {std::tuple{"disk r 0.5 m, 5 cm above", 0.5, 0.05, 0.1},
                                   std::tuple{"disk r 1 m, 1 cm above", 1.0, 0.01, 0.3},
@@ -97,8 +97,8 @@ void part_a() {
         const Light l = make_ellipse_light({0, 0, h}, {0, r, 0}, {r, 0, 0}, white, false, kPi);
         const Vec3 x{px, 0, 0};
         compare(name, l, x, up,
-                {{"area (old solid-angle)", through(l, LightSampler::Area, x, up)},
-                 {"spherical ellipse (new)", through(l, LightSampler::SolidAngle, x, up)}});
+                {{"area (old solid-angle)", through(l, ShapeSampler::Area, x, up)},
+                 {"spherical ellipse (new)", through(l, ShapeSampler::SolidAngle, x, up)}});
     }
     struct Poly {
         const char* name;
@@ -114,10 +114,10 @@ void part_a() {
     };
     for (const Poly& p : polys) {
         std::vector<std::pair<const char*, Sampler>> s = {
-            {"solid-angle", through(p.light, LightSampler::SolidAngle, p.x, p.n)},
-            {"projected-solid-angle", through(p.light, LightSampler::ProjectedSolidAngle, p.x, p.n)}};
-        if (sampler_applies(p.light, LightSampler::Parallel, p.x, p.n))
-            s.push_back({"parallel", through(p.light, LightSampler::Parallel, p.x, p.n)});
+            {"solid-angle", through(p.light, ShapeSampler::SolidAngle, p.x, p.n)},
+            {"projected-solid-angle", through(p.light, ShapeSampler::ProjectedSolidAngle, p.x, p.n)}};
+        if (sampler_applies(p.light, ShapeSampler::Parallel, p.x, p.n))
+            s.push_back({"parallel", through(p.light, ShapeSampler::Parallel, p.x, p.n)});
         compare(p.name, p.light, p.x, p.n, s);
     }
 }

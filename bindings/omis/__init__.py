@@ -6,6 +6,7 @@ for Blender/Cycles light conversions, ``demo`` for the built-in scene).
 """
 from ._omis import (
     STRATEGIES,
+    TECHNIQUES,
     BakeResult,
     Cancelled,
     Scene,
@@ -17,6 +18,6 @@ from ._omis import (
 )
 
 __all__ = [
-    "__version__", "combine", "STRATEGIES", "Scene", "direct_lighting", "Cancelled",
+    "__version__", "combine", "STRATEGIES", "TECHNIQUES", "Scene", "direct_lighting", "Cancelled",
     "bake_uv", "bake_vertices", "BakeResult",
 ]

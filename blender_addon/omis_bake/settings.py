@@ -9,37 +9,34 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, St
 
 # Technique identifiers (Blender style), their SPEC §3 names, the panel's label in an
 # artist's words (short enough for the default editor width) and the tooltip, which
-# keeps the research name.
+# keeps the research name. Built from the same parts as the library's own list
+# (`omis.TECHNIQUES`, core/render/techniques.cpp): `bsdf`, then every light
+# selection with every shape sampler; the Blender tests check the two agree.
+_SELECTIONS = (  # SPEC name, label, tooltip start
+    ("uniform", "Any Light", "Each light equally often"),
+    ("power", "Bright Lights", "Brighter lights more often"),
+    ("unoccluded", "Near Lights",
+     "The lights that light this point most (ignoring shadows) more often"),
+    ("tree", "Light Tree", "Lights chosen through a light hierarchy by their likely "
+                           "contribution (fast with many lights)"),
+)
+_SAMPLERS = (  # SPEC name, label, tooltip end
+    ("area", "Area", "a point on the light's area"),
+    ("solid-angle", "Angle", "a direction inside the light's visible outline"),
+    ("parallel", "Projected",
+     "a point of its outline as seen from the surface (parallel projection)"),
+    ("projected-solid-angle", "Cosine",
+     "a direction inside its visible outline, more often where the light falls "
+     "steeply on the surface (projected solid angle)"),
+)
 TECHNIQUES = (
     ("BSDF", "bsdf", "Surface Directions",
      "Directions the surface scatters into (cosine-weighted BSDF sampling, 'bsdf'); "
      "best for big, soft lights and the sky"),
-    ("UNIFORM_AREA", "uniform/area", "Any Light · Area",
-     "Each light equally often, a point on its area ('uniform/area')"),
-    ("UNIFORM_SOLID_ANGLE", "uniform/solid-angle", "Any Light · Angle",
-     "Each light equally often, a direction inside its visible outline "
-     "('uniform/solid-angle')"),
-    ("UNIFORM_PARALLEL", "uniform/parallel", "Any Light · Projected",
-     "Each light equally often, a point of its outline as seen from the surface "
-     "('uniform/parallel', parallel projection)"),
-    ("POWER_AREA", "power/area", "Bright Lights · Area",
-     "Brighter lights more often, a point on the light's area ('power/area')"),
-    ("POWER_SOLID_ANGLE", "power/solid-angle", "Bright Lights · Angle",
-     "Brighter lights more often, a direction inside its visible outline "
-     "('power/solid-angle')"),
-    ("POWER_PARALLEL", "power/parallel", "Bright Lights · Projected",
-     "Brighter lights more often, a point of its outline as seen from the surface "
-     "('power/parallel', parallel projection)"),
-    ("UNOCCLUDED_AREA", "unoccluded/area", "Near Lights · Area",
-     "The lights that light this point most (ignoring shadows) more often, a point on "
-     "the light's area ('unoccluded/area')"),
-    ("UNOCCLUDED_SOLID_ANGLE", "unoccluded/solid-angle", "Near Lights · Angle",
-     "The lights that light this point most (ignoring shadows) more often, a direction "
-     "inside the light's visible outline ('unoccluded/solid-angle')"),
-    ("UNOCCLUDED_PARALLEL", "unoccluded/parallel", "Near Lights · Projected",
-     "The lights that light this point most (ignoring shadows) more often, a point of "
-     "its outline as seen from the surface ('unoccluded/parallel', parallel projection)"),
-)
+) + tuple(
+    (f"{sel.upper()}_{smp.upper().replace('-', '_')}", f"{sel}/{smp}",
+     f"{sel_label} · {smp_label}", f"{sel_tip}, {smp_tip} ('{sel}/{smp}')")
+    for sel, sel_label, sel_tip in _SELECTIONS for smp, smp_label, smp_tip in _SAMPLERS)
 TECHNIQUE_NAME = {ident: name for ident, name, _, _ in TECHNIQUES}
 TECHNIQUE_ID = {name: ident for ident, name, _, _ in TECHNIQUES}
 

@@ -199,12 +199,12 @@ const char* light_type_name(LightType type) {
     return "unknown";
 }
 
-const char* light_sampler_name(LightSampler sampler) {
+const char* shape_sampler_name(ShapeSampler sampler) {
     switch (sampler) {
-        case LightSampler::Area: return "area";
-        case LightSampler::SolidAngle: return "solid-angle";
-        case LightSampler::Parallel: return "parallel";
-        case LightSampler::ProjectedSolidAngle: return "projected-solid-angle";
+        case ShapeSampler::Area: return "area";
+        case ShapeSampler::SolidAngle: return "solid-angle";
+        case ShapeSampler::Parallel: return "parallel";
+        case ShapeSampler::ProjectedSolidAngle: return "projected-solid-angle";
     }
     return "unknown";
 }
@@ -314,7 +314,12 @@ Light make_point_light(const Vec3& position, const Vec3& intensity, double radiu
     require_traceable(position, "position");
     require_emission(intensity, "intensity");
     if (!(radius >= 0) || !std::isfinite(radius)) invalid("radius", "must be ≥ 0 and finite");
-    if (radius > 0) require_size(kPi * radius * radius, "radius", number(radius) + " m", "area");
+    // A sphere of radius r lights a point at distance d as a point light does, to
+    // O((r/d)²): below a micrometre, 1e-6 relative from a millimetre on. Smaller
+    // spheres are points, rather than cones too narrow to sample in double
+    // precision (they would light nothing).
+    constexpr double kSmallestSphereRadius = 1e-6;
+    if (radius < kSmallestSphereRadius) radius = 0;
     Light l;
     l.type = LightType::Point;
     l.position = position;
@@ -472,16 +477,16 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
     return false;
 }
 
-bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n) {
+bool sampler_applies(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3& n) {
     if (!light_reaches(l, x, n)) return false;
-    if (sampler == LightSampler::ProjectedSolidAngle) {
+    if (sampler == ShapeSampler::ProjectedSolidAngle) {
         // Polygons need an area above the horizon; other shapes fall back to solid angle.
         if (l.type == LightType::Triangle) return l.triangle.projected(x, n).has_value();
         if (l.type != LightType::Rect) return true;
         const auto r = rect_reaching(l, x);
         return r && r->projected(x, n).has_value();
     }
-    if (sampler != LightSampler::Parallel) return true;
+    if (sampler != ShapeSampler::Parallel) return true;
     switch (l.type) {
         case LightType::Rect: {
             const auto r = rect_reaching(l, x);
@@ -495,45 +500,45 @@ bool sampler_applies(const Light& l, LightSampler sampler, const Vec3& x, const 
     }
 }
 
-std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, const Vec3& x,
+std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, const Vec3& x,
                                         const Vec3& n, double u1, double u2) {
-    if (sampler == LightSampler::ProjectedSolidAngle) {
+    if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.sample_projected(x, n, u1, u2);
         if (l.type == LightType::Rect) {
             const auto r = rect_reaching(l, x);
             return r ? r->sample_projected(x, n, u1, u2) : std::nullopt;
         }
-        sampler = LightSampler::SolidAngle;
+        sampler = ShapeSampler::SolidAngle;
     }
     switch (l.type) {
         case LightType::Rect: {
             const auto r = rect_reaching(l, x);
             if (!r) return std::nullopt;
-            if (sampler == LightSampler::Area) return r->sample_area(x, u1, u2);
-            if (sampler == LightSampler::SolidAngle) return r->sample_solid_angle(x, u1, u2);
+            if (sampler == ShapeSampler::Area) return r->sample_area(x, u1, u2);
+            if (sampler == ShapeSampler::SolidAngle) return r->sample_solid_angle(x, u1, u2);
             return r->sample_parallel(x, n, u1, u2);
         }
         case LightType::Triangle:
-            if (sampler == LightSampler::Area) return l.triangle.sample_area(x, u1, u2);
-            if (sampler == LightSampler::SolidAngle)
+            if (sampler == ShapeSampler::Area) return l.triangle.sample_area(x, u1, u2);
+            if (sampler == ShapeSampler::SolidAngle)
                 return l.triangle.sample_solid_angle(x, u1, u2);
             return l.triangle.sample_parallel(x, n, u1, u2);
         case LightType::Ellipse: {
             // Parallel projects the whole ellipse; area and solid angle draw only
             // the part a spread lets reach x when that is not all of it.
-            if (sampler == LightSampler::Parallel) return l.ellipse.sample_parallel(x, n, u1, u2);
+            if (sampler == ShapeSampler::Parallel) return l.ellipse.sample_parallel(x, n, u1, u2);
             const EllipseReach reach = ellipse_reach(l, x);
             if (reach.part) return l.ellipse.sample_clipped(x, *reach.part, u1, u2);
             if (!reach.whole) return std::nullopt;
-            if (sampler == LightSampler::Area) return l.ellipse.sample_area(x, u1, u2);
+            if (sampler == ShapeSampler::Area) return l.ellipse.sample_area(x, u1, u2);
             return l.ellipse.sample_solid_angle(x, u1, u2);
         }
         case LightType::Point:
         case LightType::Spot: {
             if (!has_radius(l)) return std::nullopt;
             const SphereLight s = sphere_of(l);
-            if (sampler == LightSampler::Area) return s.sample_area(x, u1, u2);
-            if (sampler == LightSampler::SolidAngle) return s.sample_solid_angle(x, u1, u2);
+            if (sampler == ShapeSampler::Area) return s.sample_area(x, u1, u2);
+            if (sampler == ShapeSampler::SolidAngle) return s.sample_solid_angle(x, u1, u2);
             return s.sample_parallel(x, n, u1, u2);
         }
         case LightType::Sun:
@@ -550,42 +555,42 @@ std::optional<LightSample> sample_light(const Light& l, LightSampler sampler, co
     return std::nullopt;
 }
 
-double light_pdf(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n,
+double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w) {
-    if (sampler == LightSampler::ProjectedSolidAngle) {
+    if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.pdf_projected(x, n, w);
         if (l.type == LightType::Rect) {
             const auto r = rect_reaching(l, x);
             return r ? r->pdf_projected(x, n, w) : 0.0;
         }
-        sampler = LightSampler::SolidAngle;
+        sampler = ShapeSampler::SolidAngle;
     }
     switch (l.type) {
         case LightType::Rect: {
             const auto r = rect_reaching(l, x);
             if (!r) return 0;
-            if (sampler == LightSampler::Area) return r->pdf_area(x, w);
-            if (sampler == LightSampler::SolidAngle) return r->pdf_solid_angle(x, w);
+            if (sampler == ShapeSampler::Area) return r->pdf_area(x, w);
+            if (sampler == ShapeSampler::SolidAngle) return r->pdf_solid_angle(x, w);
             return r->pdf_parallel(x, n, w);
         }
         case LightType::Triangle:
-            if (sampler == LightSampler::Area) return l.triangle.pdf_area(x, w);
-            if (sampler == LightSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, w);
+            if (sampler == ShapeSampler::Area) return l.triangle.pdf_area(x, w);
+            if (sampler == ShapeSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, w);
             return l.triangle.pdf_parallel(x, n, w);
         case LightType::Ellipse: {
-            if (sampler == LightSampler::Parallel) return l.ellipse.pdf_parallel(x, n, w);
+            if (sampler == ShapeSampler::Parallel) return l.ellipse.pdf_parallel(x, n, w);
             const EllipseReach reach = ellipse_reach(l, x);
             if (reach.part) return l.ellipse.pdf_clipped(x, *reach.part, w);
             if (!reach.whole) return 0;
-            if (sampler == LightSampler::Area) return l.ellipse.pdf_area(x, w);
+            if (sampler == ShapeSampler::Area) return l.ellipse.pdf_area(x, w);
             return l.ellipse.pdf_solid_angle(x, w);
         }
         case LightType::Point:
         case LightType::Spot: {
             if (!has_radius(l)) return 0;
             const SphereLight s = sphere_of(l);
-            if (sampler == LightSampler::Area) return s.pdf_area(x, w);
-            if (sampler == LightSampler::SolidAngle) return s.pdf_solid_angle(x, w);
+            if (sampler == ShapeSampler::Area) return s.pdf_area(x, w);
+            if (sampler == ShapeSampler::SolidAngle) return s.pdf_solid_angle(x, w);
             return s.pdf_parallel(x, n, w);
         }
         case LightType::Sun:

@@ -16,11 +16,12 @@ namespace omis {
 enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World };
 const char* light_type_name(LightType type);
 
-// How a light technique draws a point/direction on a chosen light (SPEC §3).
+// How a light technique draws a direction toward the light it has chosen — the
+// light's shape (SPEC §3); choosing the light is LightSelection's part.
 // ProjectedSolidAngle draws ∝ cos θ on rects and triangles; other shapes use their
 // solid-angle sampler under that name.
-enum class LightSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
-const char* light_sampler_name(LightSampler sampler);
+enum class ShapeSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
+const char* shape_sampler_name(ShapeSampler sampler);
 
 struct Light {
     LightType type = LightType::Rect;
@@ -101,7 +102,7 @@ bool light_reaches(const Light& light, const Vec3& x, const Vec3& n);
 // parallel projection needs the light wholly above the horizon and a planar
 // or disk shape. Sun and world have no shape of their own: they use their
 // cone and the cosine hemisphere for every sampler (see sample_light).
-bool sampler_applies(const Light& light, LightSampler sampler, const Vec3& x, const Vec3& n);
+bool sampler_applies(const Light& light, ShapeSampler sampler, const Vec3& x, const Vec3& n);
 
 // The rectangle a rect light's samplers draw from at x: the whole light, or with
 // spread < π the part of it inside the bounding square of the spread's reach
@@ -110,9 +111,9 @@ std::optional<RectLight> rect_reaching(const Light& light, const Vec3& x);
 
 // A direction toward the light drawn by `sampler`, with its solid-angle pdf
 // (sr⁻¹), and the matching pdf evaluation (0 where w misses the light).
-std::optional<LightSample> sample_light(const Light& light, LightSampler sampler,
+std::optional<LightSample> sample_light(const Light& light, ShapeSampler sampler,
                                         const Vec3& x, const Vec3& n, double u1, double u2);
-double light_pdf(const Light& light, LightSampler sampler, const Vec3& x, const Vec3& n,
+double light_pdf(const Light& light, ShapeSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w);
 
 // Unoccluded irradiance luminance at (x, n) (SPEC §5 for polygons): the

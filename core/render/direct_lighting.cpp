@@ -115,11 +115,11 @@ struct PointLighting::Impl {
     };
     static constexpr std::size_t kMaxCachedLights = 1024;
     const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x);
-    std::optional<LightSample> sample(std::uint32_t l, LightSampler sampler, const Vec3& x,
+    std::optional<LightSample> sample(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                       const Vec3& n, double u1, double u2);
     static std::optional<LightSample> sample_cached(const SolidAngleCache& c, double u1,
                                                     double u2);
-    double pdf(std::uint32_t l, LightSampler sampler, const Vec3& x, const Vec3& n,
+    double pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
                const Vec3& w);
     std::vector<SolidAngleCache> solid_angle_cache_;
     std::uint64_t point_serial_ = 0;
@@ -166,13 +166,13 @@ const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std
     return &c;
 }
 
-std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, LightSampler sampler,
+std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSampler sampler,
                                                        const Vec3& x, const Vec3& n, double u1,
                                                        double u2) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
+    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
-        sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
     std::optional<LightSample> s;
     if (!c) s = sample_light(light, sampler, x, n, u1, u2);
     else s = sample_cached(*c, u1, u2);
@@ -195,12 +195,12 @@ std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCa
     return std::nullopt;
 }
 
-double PointLighting::Impl::pdf(std::uint32_t l, LightSampler sampler, const Vec3& x,
+double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == LightSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = LightSampler::Area;
+    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
-        sampler == LightSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
     if (!c) return light_pdf(light, sampler, x, n, w);
     if (c->rect) return c->rect->pdf(w);
     if (c->triangle) return c->triangle->pdf(w);
@@ -698,7 +698,8 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
                                     std::to_string(s.techniques.size()) + "), got " +
                                     std::to_string(s.samples.size()));
     if (s.techniques.size() > kMaxMisTechniques)
-        throw std::invalid_argument("techniques: at most 32");
+        throw std::invalid_argument("techniques: at most " +
+                                    std::to_string(kMaxMisTechniques));
     for (int n : s.samples)
         if (n < 0) throw std::invalid_argument("samples: counts must not be negative");
     if (s.rounds < 1) throw std::invalid_argument("rounds: must be at least 1");

@@ -71,7 +71,7 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
                                          : "no light a BSDF ray can hit (delta lights only)";
         else if (!t.bsdf && plan.integrated_lights == 0)
             why = "no light with area or angle to sample (delta lights only)";
-        else if (!t.bsdf && t.sampler == LightSampler::Parallel && !any_projectable)
+        else if (!t.bsdf && t.sampler == ShapeSampler::Parallel && !any_projectable)
             why = "no light with a planar region to project";
         plan.enabled.push_back(why.empty());
         if (why.empty() && !t.bsdf && t.selection == LightSelection::Tree)

@@ -2,7 +2,7 @@
 // draws toward, and the probability of drawing a given light, at a shading
 // point (x, n). Both cost O(1) or O(log L) whatever the light count L, and
 // need no per-point setup, so they may be evaluated at a new x for every
-// sample (pbrt-v4's LightSampler interface).
+// sample (pbrt-v4's ShapeSampler interface).
 //
 // - Uniform: 1/L.
 // - Power:   ∝ emitted power, by binary search in a CDF (O(log L)).

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "lights/light.h"
 
@@ -17,7 +18,7 @@ enum class LightSelection { Uniform, Power, Unoccluded, Tree };
 struct Technique {
     bool bsdf = false;  // cosine-weighted hemisphere
     LightSelection selection = LightSelection::Uniform;
-    LightSampler sampler = LightSampler::SolidAngle;
+    ShapeSampler sampler = ShapeSampler::SolidAngle;
 
     std::string name() const;
     bool operator==(const Technique& o) const {
@@ -28,5 +29,10 @@ struct Technique {
 // "bsdf", "uniform/area", "power/solid-angle", "unoccluded/parallel", "tree/solid-angle",
 // "uniform/projected-solid-angle", ...
 std::optional<Technique> parse_technique(std::string_view name);
+
+// Every technique name parse_technique accepts, `bsdf` first.
+std::vector<std::string> technique_names();
+// The same as a pattern for error messages: "bsdf, or <uniform|…>/<area|…>".
+std::string technique_grammar();
 
 }  // namespace omis

@@ -40,9 +40,9 @@ int main(int argc, char** argv) {
     omisSetErrorFunction(on_error, NULL);
 
     scene = omisNewScene();
-    floor = omisSceneAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL, uvs,
+    floor = omisAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL, uvs,
                              NULL);
-    omisSceneAddRectLight(scene, corner, edgeU, edgeV, radiance, false, 3.14159265358979);
+    omisAddRectLight(scene, corner, edgeU, edgeV, radiance, false, 3.14159265358979);
     omisCommitScene(scene);
 
     bake = omisNewBake(scene, OMIS_BAKE_LIGHTMAP, floor);

@@ -13,6 +13,23 @@
 
 #include "mis/strategy.h"
 #include "omis/omis.h"
+#include "mis/estimator.h"
+
+// Writes text into a caller's buffer as the ABI's text queries promise: at
+// most size bytes with the terminating NUL (nothing when size is 0); returns
+// the full length without the NUL.
+inline std::size_t copy_text(const std::string& text, char* buffer, std::size_t size) {
+    if (buffer && size > 0) {
+        const std::size_t n = text.size() < size - 1 ? text.size() : size - 1;
+        std::memcpy(buffer, text.data(), n);
+        buffer[n] = '\0';
+    }
+    return text.size();
+}
+
+// The ABI's published limits are the core's own.
+static_assert(OMIS_MAX_TECHNIQUES == omis::kMaxMisTechniques, "OMIS_MAX_TECHNIQUES");
+static_assert(OMIS_MAX_CHANNELS == omis::kMaxMisChannels, "OMIS_MAX_CHANNELS");
 
 namespace omis::api {
 

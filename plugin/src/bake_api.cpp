@@ -258,9 +258,9 @@ OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats
     return guarded(false, [&] {
         const auto& s = checked(result, "result")->result.stats;
         OMISBakeStats& out = *checked(stats, "stats");
-        out.status = s.status == omis::BakeStatus::TimeBudget    ? 1
-                     : s.status == omis::BakeStatus::NoiseTarget ? 2
-                                                                 : 0;
+        out.status = s.status == omis::BakeStatus::TimeBudget    ? OMIS_BAKE_TIME_BUDGET
+                     : s.status == omis::BakeStatus::NoiseTarget ? OMIS_BAKE_NOISE_TARGET
+                                                                 : OMIS_BAKE_COMPLETE;
         out.seconds = s.seconds;
         out.samples = s.samples;
         out.raysTraced = s.rays_traced;
@@ -277,14 +277,7 @@ OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats
 
 OMIS_API size_t omisGetBakeResultPlan(OMISBakeResult result, char* buffer, size_t size) {
     return guarded<size_t>(0, [&] {
-        const auto& s = checked(result, "result")->result.stats;
-        std::string text = s.plan;
-        if (buffer && size > 0) {
-            const std::size_t n = std::min(text.size(), size - 1);
-            std::memcpy(buffer, text.data(), n);
-            buffer[n] = '\0';
-        }
-        return text.size();
+        return copy_text(checked(result, "result")->result.stats.plan, buffer, size);
     });
 }
 

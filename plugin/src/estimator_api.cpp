@@ -102,7 +102,7 @@ OMIS_API void omisCommitEstimator(OMISEstimator estimator) {
     });
 }
 
-OMIS_API bool omisEstimatorAddSamples(OMISEstimator estimator, size_t count,
+OMIS_API bool omisAddEstimatorSamples(OMISEstimator estimator, size_t count,
                                       const int* technique, size_t techniqueStride,
                                       const double* pdfs, size_t pdfStride,
                                       const double* f, size_t fStride) {
@@ -115,7 +115,7 @@ OMIS_API bool omisEstimatorAddSamples(OMISEstimator estimator, size_t count,
     });
 }
 
-OMIS_API bool omisEstimatorGetResult(OMISEstimator estimator, double* estimate,
+OMIS_API bool omisGetEstimatorResult(OMISEstimator estimator, double* estimate,
                                      double* variance) {
     return guarded(false, [&] {
         auto& e = checked(estimator, "estimator")->committed();

@@ -97,9 +97,8 @@ TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const cha
                                         "'");
         const auto technique = omis::parse_technique(name);
         if (!technique)
-            throw std::invalid_argument(
-                "techniques: unknown technique '" + name +
-                "' (bsdf, or <uniform|power|unoccluded|tree>/<area|solid-angle|parallel>)");
+            throw std::invalid_argument("techniques: unknown technique '" + name + "' (" +
+                                        omis::technique_grammar() + ")");
         choice.techniques.push_back(*technique);
         if (end == list.size()) break;
         begin = end + 1;
@@ -135,7 +134,7 @@ OMIS_API void omisReleaseScene(OMISScene scene) {
     guarded_void([&] { release(checked(scene, "scene")); });
 }
 
-OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices,
+OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices,
                                        OMISDataType type, size_t vertexByteStride,
                                        size_t numVertices, const uint32_t* triangles,
                                        size_t numTriangles, const void* cornerNormals,
@@ -171,71 +170,71 @@ OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices,
             in.uvs = scalar_array(cornerUVs, type, 0, 3 * numTriangles, 2, uv_copy);
         if (emission) in.emission = omis::Vec3{emission[0], emission[1], emission[2]};
 
-        auto lock = s->lock_for_build("omisSceneAddMesh");
+        auto lock = s->lock_for_build("omisAddMesh");
         return static_cast<unsigned int>(s->scene.add_mesh(in));
     });
 }
 
-OMIS_API unsigned int omisSceneAddRectLight(OMISScene scene, const double corner[3],
+OMIS_API unsigned int omisAddRectLight(OMISScene scene, const double corner[3],
                                             const double edgeU[3], const double edgeV[3],
                                             const double radiance[3], bool twoSided,
                                             double spread) {
-    return add_light(scene, "omisSceneAddRectLight", [&] {
+    return add_light(scene, "omisAddRectLight", [&] {
         return omis::make_rect_light(vec3(corner, "corner"), vec3(edgeU, "edgeU"),
                                      vec3(edgeV, "edgeV"), vec3(radiance, "radiance"),
                                      twoSided, spread);
     });
 }
 
-OMIS_API unsigned int omisSceneAddEllipseLight(OMISScene scene, const double center[3],
+OMIS_API unsigned int omisAddEllipseLight(OMISScene scene, const double center[3],
                                                const double axisA[3],
                                                const double axisB[3],
                                                const double radiance[3], bool twoSided,
                                                double spread) {
-    return add_light(scene, "omisSceneAddEllipseLight", [&] {
+    return add_light(scene, "omisAddEllipseLight", [&] {
         return omis::make_ellipse_light(vec3(center, "center"), vec3(axisA, "axisA"),
                                         vec3(axisB, "axisB"), vec3(radiance, "radiance"),
                                         twoSided, spread);
     });
 }
 
-OMIS_API unsigned int omisSceneAddPointLight(OMISScene scene, const double position[3],
+OMIS_API unsigned int omisAddPointLight(OMISScene scene, const double position[3],
                                              const double intensity[3], double radius) {
-    return add_light(scene, "omisSceneAddPointLight", [&] {
+    return add_light(scene, "omisAddPointLight", [&] {
         return omis::make_point_light(vec3(position, "position"),
                                       vec3(intensity, "intensity"), radius);
     });
 }
 
-OMIS_API unsigned int omisSceneAddSpotLight(OMISScene scene, const double position[3],
+OMIS_API unsigned int omisAddSpotLight(OMISScene scene, const double position[3],
                                             const double direction[3],
                                             const double intensity[3], double radius,
                                             double spotSize, double spotBlend) {
-    return add_light(scene, "omisSceneAddSpotLight", [&] {
+    return add_light(scene, "omisAddSpotLight", [&] {
         return omis::make_spot_light(
             vec3(position, "position"), vec3(direction, "direction"),
             vec3(intensity, "intensity"), radius, spotSize, spotBlend);
     });
 }
 
-OMIS_API unsigned int omisSceneAddSunLight(OMISScene scene, const double direction[3],
+OMIS_API unsigned int omisAddSunLight(OMISScene scene, const double direction[3],
                                            const double irradiance[3], double angle) {
-    return add_light(scene, "omisSceneAddSunLight", [&] {
+    return add_light(scene, "omisAddSunLight", [&] {
         return omis::make_sun_light(vec3(direction, "direction"),
                                     vec3(irradiance, "irradiance"), angle);
     });
 }
 
-OMIS_API unsigned int omisSceneSetWorld(OMISScene scene, const double radiance[3]) {
-    return add_light(scene, "omisSceneSetWorld",
+OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]) {
+    return add_light(scene, "omisSetWorld",
                      [&] { return omis::make_world_light(vec3(radiance, "radiance")); });
 }
 
-OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
+OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
                                      bool visibleToBsdf) {
     guarded_void([&] {
         auto* s = checked(scene, "scene");
-        auto lock = s->lock_for_build("omisSceneSetLightFlags");
+        auto lock = s->lock_for_build("omisSetLightFlags");
         const std::size_t n = s->scene.lights().size();
         if (light >= n)
             throw std::invalid_argument("light: no light with id " +
@@ -283,14 +282,18 @@ OMIS_API size_t omisGetEffectPlan(OMISScene scene, const char* techniques,
         if (bufferSize > 0) checked(buffer, "buffer");
         const omis::Scene& sc = s->committed_scene("omisGetEffectPlan");
         const TechniqueChoice choice = choose_techniques(sc, techniques, samples);
-        const std::string text =
-            omis::plan_effects(sc, choice.techniques, choice.samples).to_string();
-        if (bufferSize > 0) {
-            const std::size_t n = std::min(text.size(), bufferSize - 1);
-            std::memcpy(buffer, text.data(), n);
-            buffer[n] = '\0';
-        }
-        return text.size();
+        return copy_text(omis::plan_effects(sc, choice.techniques, choice.samples).to_string(),
+                         buffer, bufferSize);
+    });
+}
+
+OMIS_API size_t omisGetTechniqueNames(char* buffer, size_t bufferSize) {
+    return guarded<size_t>(0, [&] {
+        if (bufferSize > 0) checked(buffer, "buffer");
+        std::string text;
+        for (const std::string& name : omis::technique_names())
+            text += (text.empty() ? "" : ",") + name;
+        return copy_text(text, buffer, bufferSize);
     });
 }
 

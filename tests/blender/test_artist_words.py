@@ -59,6 +59,12 @@ def test_labels_and_tooltips():
     for ident, spec_name, _, _ in settings.TECHNIQUES:
         check(f"'{spec_name}'" in items[ident].description,
               f"{ident}: the tooltip lacks the research name {spec_name}")
+    # The add-on offers exactly the techniques the library knows (one owner of
+    # the names: core/render/techniques.cpp, published as omis.TECHNIQUES).
+    from omis_bake import native
+    library = tuple(native.require().TECHNIQUES)
+    offered = tuple(name for _, name, _, _ in settings.TECHNIQUES)
+    check(offered == library, f"add-on techniques {offered} differ from omis' {library}")
     tooltip = rna.properties["use_optimal_mis"].description
     check("optimal multiple importance sampling" in tooltip, tooltip)
     check("effect plan" in rna.properties["technique_mode"].enum_items["AUTO"].description,

@@ -14,9 +14,9 @@ static OMISScene floor_scene(int with_uvs) {
     const double corner[3] = {-0.5, -0.5, 1}, u[3] = {0, 1, 0}, v[3] = {1, 0, 0};
     const double radiance[3] = {1, 1, 1};
     OMISScene scene = omisNewScene();
-    omisSceneAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL,
+    omisAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2, NULL,
                      with_uvs ? uvs : NULL, NULL);
-    omisSceneAddRectLight(scene, corner, u, v, radiance, false, 3.14159265358979);
+    omisAddRectLight(scene, corner, u, v, radiance, false, 3.14159265358979);
     return scene;
 }
 

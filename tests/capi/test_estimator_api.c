@@ -25,9 +25,9 @@ static void test_balance_matches_hand_computation(void) {
     OMISEstimator e = omisNewEstimator(OMIS_STRATEGY_BALANCE, 2, 1, counts);
     CHECK(e != NULL);
     omisCommitEstimator(e);
-    CHECK(omisEstimatorAddSamples(e, 6, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
+    CHECK(omisAddEstimatorSamples(e, 6, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
                                   sizeof(double)));
-    CHECK(omisEstimatorGetResult(e, &estimate, &variance));
+    CHECK(omisGetEstimatorResult(e, &estimate, &variance));
     for (s = 0; s < 6; ++s) expected += f[s] / (pdfs[2 * s] + 2 * pdfs[2 * s + 1]);
     expected /= 2.0;
     CHECK(fabs(estimate - expected) <= 1e-14 * fabs(expected));
@@ -63,7 +63,7 @@ static void test_errors(void) {
 
     /* wrong order: use before commit */
     e = omisNewEstimator(OMIS_STRATEGY_OPTIMAL_DIRECT, 2, 1, counts);
-    CHECK(!omisEstimatorGetResult(e, &estimate, NULL));
+    CHECK(!omisGetEstimatorResult(e, &estimate, NULL));
     CHECK(omisGetError(&message) == OMIS_ERROR_INVALID_OPERATION);
     CHECK(strstr(message, "commit") != NULL);
 
@@ -76,12 +76,12 @@ static void test_errors(void) {
 
     /* invalid samples */
     omisCommitEstimator(e);
-    CHECK(!omisEstimatorAddSamples(e, 2, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
+    CHECK(!omisAddEstimatorSamples(e, 2, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
                                    sizeof(double)));
     CHECK(omisGetError(&message) == OMIS_ERROR_INVALID_ARGUMENT);
     CHECK(strstr(message, "own technique") != NULL && strstr(message, "sample 0") != NULL);
     /* no complete round: an operation error, not a crash */
-    CHECK(!omisEstimatorGetResult(e, &estimate, NULL));
+    CHECK(!omisGetEstimatorResult(e, &estimate, NULL));
     CHECK(omisGetError(NULL) == OMIS_ERROR_INVALID_OPERATION);
 
     /* reference counting: retain keeps it alive across one release */

@@ -41,7 +41,7 @@ static void enums_out_of_range(OMISScene scene) {
     CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "target"));
     {
         OMISScene other = omisNewScene();
-        CHECK(omisSceneAddMesh(other, vertex, (OMISDataType)1000, 0, 1, triangle, 1, NULL, NULL,
+        CHECK(omisAddMesh(other, vertex, (OMISDataType)1000, 0, 1, triangle, 1, NULL, NULL,
                                NULL) == OMIS_INVALID_ID);
         CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "type"));
         omisReleaseScene(other);
@@ -73,11 +73,11 @@ static void estimator_committed_once(void) {
     OMISEstimator e = omisNewEstimator(OMIS_STRATEGY_BALANCE, 2, 1, counts);
     omisCommitEstimator(e);
     CHECK(omisGetError(NULL) == OMIS_ERROR_NONE);
-    CHECK(omisEstimatorAddSamples(e, 2, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
+    CHECK(omisAddEstimatorSamples(e, 2, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
                                   sizeof(double)));
     omisCommitEstimator(e); /* would drop the samples */
     CHECK(error_names(OMIS_ERROR_INVALID_OPERATION, "already committed"));
-    CHECK(omisEstimatorGetResult(e, &estimate, NULL));
+    CHECK(omisGetEstimatorResult(e, &estimate, NULL));
     CHECK(estimate == 1.0); /* both samples kept: f/q = 1/2 from each technique */
     omisReleaseEstimator(e);
 }

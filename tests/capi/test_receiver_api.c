@@ -24,9 +24,9 @@ int main(void) {
     int m, i;
     OMISScene scene = omisNewScene();
     for (m = 0; m < 3; ++m)
-        mesh[m] = omisSceneAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2,
+        mesh[m] = omisAddMesh(scene, vertices, OMIS_DATA_FLOAT32, 0, 4, triangles, 2,
                                    NULL, NULL, NULL);
-    omisSceneAddSunLight(scene, travel, irradiance, 0);
+    omisAddSunLight(scene, travel, irradiance, 0);
 
     omisSetMeshReceiver(NULL, 0, OMIS_RECEIVER_LAMBERT, 0);
     CHECK(omisGetError(&message) == OMIS_ERROR_INVALID_ARGUMENT && strstr(message, "scene"));

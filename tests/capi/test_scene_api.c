@@ -77,7 +77,7 @@ static const double kRadiance[3] = {1.0, 2.0, 0.5};
 
 static OMISScene rect_scene(void) {
     OMISScene scene = omisNewScene();
-    CHECK(omisSceneAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           0);
     omisCommitScene(scene);
     CHECK(omisGetError(NULL) == OMIS_ERROR_NONE);
@@ -105,7 +105,7 @@ static void test_errors(void) {
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "NULL"));
     omisCommitScene(NULL);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "scene"));
-    CHECK(omisSceneAddRectLight(NULL, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(NULL, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "scene"));
     CHECK(!omisDirectLighting(NULL, point, up, 1, NULL, NULL, 1, OMIS_STRATEGY_BALANCE,
@@ -120,38 +120,38 @@ static void test_errors(void) {
     /* invalid meshes */
     memcpy(nan_quad, quad, sizeof quad);
     nan_quad[2][1] = NAN;
-    CHECK(omisSceneAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &bad_tris[0][0], 2, NULL,
+    CHECK(omisAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &bad_tris[0][0], 2, NULL,
                            NULL, NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "out of range"));
-    CHECK(omisSceneAddMesh(scene, nan_quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
+    CHECK(omisAddMesh(scene, nan_quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
                            NULL, NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "vertex 2"));
-    CHECK(omisSceneAddMesh(scene, quad, (OMISDataType)7, 0, 4, &tris[0][0], 2, NULL, NULL,
+    CHECK(omisAddMesh(scene, quad, (OMISDataType)7, 0, 4, &tris[0][0], 2, NULL, NULL,
                            NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "type"));
-    CHECK(omisSceneAddMesh(scene, quad, OMIS_DATA_FLOAT32, 4, 4, &tris[0][0], 2, NULL,
+    CHECK(omisAddMesh(scene, quad, OMIS_DATA_FLOAT32, 4, 4, &tris[0][0], 2, NULL,
                            NULL, NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "vertexByteStride"));
-    CHECK(omisSceneAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, NULL, 2, NULL, NULL,
+    CHECK(omisAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, NULL, 2, NULL, NULL,
                            NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "triangles"));
 
     /* invalid lights */
-    CHECK(omisSceneAddRectLight(scene, kCorner, kEdgeU, zero_edge, kRadiance, false,
+    CHECK(omisAddRectLight(scene, kCorner, kEdgeU, zero_edge, kRadiance, false,
                                 kPi) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, NULL));
-    CHECK(omisSceneAddRectLight(scene, kCorner, NULL, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(scene, kCorner, NULL, kEdgeV, kRadiance, false, kPi) ==
           OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "edgeU"));
-    CHECK(omisSceneAddPointLight(scene, point, kRadiance, -1.0) == OMIS_INVALID_ID);
+    CHECK(omisAddPointLight(scene, point, kRadiance, -1.0) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, NULL));
 
     /* a valid mesh (its id is 0: failed adds leave no trace) and light */
-    CHECK(omisSceneAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
+    CHECK(omisAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
                            NULL, NULL) == 0);
-    CHECK(omisSceneAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           0);
-    omisSceneSetLightFlags(scene, 5, true, true);
+    omisSetLightFlags(scene, 5, true, true);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "light"));
 
     /* use before commit */
@@ -165,13 +165,13 @@ static void test_errors(void) {
     omisCommitScene(scene);
     omisCommitScene(scene); /* a second commit does nothing */
     CHECK(omisGetError(NULL) == OMIS_ERROR_NONE);
-    CHECK(omisSceneAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
-    CHECK(omisSceneAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
+    CHECK(omisAddMesh(scene, quad, OMIS_DATA_FLOAT32, 0, 4, &tris[0][0], 2, NULL,
                            NULL, NULL) == OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
-    omisSceneSetLightFlags(scene, 0, false, true);
+    omisSetLightFlags(scene, 0, false, true);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
 
     /* invalid lighting arguments */
@@ -303,9 +303,9 @@ static void test_strided_mesh_and_shadow_rays(void) {
         corner_normals[c][1] = 0.0;
         corner_normals[c][2] = 1.0;
     }
-    CHECK(omisSceneAddMesh(scene, floor4, OMIS_DATA_FLOAT64, sizeof floor4[0], 4,
+    CHECK(omisAddMesh(scene, floor4, OMIS_DATA_FLOAT64, sizeof floor4[0], 4,
                            &tris[0][0], 2, corner_normals, NULL, NULL) == 0);
-    CHECK(omisSceneAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
+    CHECK(omisAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           0);
     omisCommitScene(scene);
     CHECK(omisDirectLighting(scene, point, up, 1, "unoccluded/solid-angle", samples, 4,

@@ -138,7 +138,7 @@ bool reaches(const Light& light, const Vec3& x, const Vec3& n) {
     if (!light_reaches(light, x, n)) return false;
     for (int i = 0; i < 16; ++i)
         for (int j = 0; j < 16; ++j) {
-            const auto s = sample_light(light, LightSampler::Area, x, n, (i + 0.5) / 16,
+            const auto s = sample_light(light, ShapeSampler::Area, x, n, (i + 0.5) / 16,
                                         (j + 0.5) / 16);
             if (!s || dot(s->dir, n) <= 0) continue;
             const auto e = emitted_radiance(light, x, s->dir);

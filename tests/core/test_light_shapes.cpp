@@ -72,7 +72,7 @@ struct Mean {
 };
 
 // The light technique's estimator Σ L cos/pdf / N with pdf checks.
-Mean estimate(const Light& l, LightSampler sampler, const Vec3& x, const Vec3& n, int count,
+Mean estimate(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3& n, int count,
               std::uint64_t seed) {
     std::mt19937_64 rng(seed);
     std::uniform_real_distribution<double> uni(0.0, 1.0);
@@ -122,10 +122,10 @@ TEST_CASE("spread lights: sampling only the reachable part matches the spread-we
         INFO(c.name);
         const double exact = reference(c.light, c.x, c.n);
         REQUIRE(exact > 0);
-        for (LightSampler sampler : {LightSampler::Area, LightSampler::SolidAngle, LightSampler::Parallel,
-                                     LightSampler::ProjectedSolidAngle}) {
+        for (ShapeSampler sampler : {ShapeSampler::Area, ShapeSampler::SolidAngle, ShapeSampler::Parallel,
+                                     ShapeSampler::ProjectedSolidAngle}) {
             if (!sampler_applies(c.light, sampler, c.x, c.n)) continue;
-            INFO("sampler " << light_sampler_name(sampler));
+            INFO("sampler " << shape_sampler_name(sampler));
             const Mean m = estimate(c.light, sampler, c.x, c.n, 40000, seed++);
             INFO("estimate " << m.mean << " ± " << m.se << ", exact " << exact);
             CHECK(m.worst_pdf <= 1e-6);
@@ -148,7 +148,7 @@ TEST_CASE("spread rect: the light technique draws only the square the spread rea
     CHECK(length(r->edge_v) == Approx(side));
     // A direction to a point of the light outside the square: no pdf, no radiance.
     const Vec3 w = normalize(Vec3{0.6, 0.1, 0.3} - x);
-    CHECK(light_pdf(l, LightSampler::SolidAngle, x, n, w) == 0);
+    CHECK(light_pdf(l, ShapeSampler::SolidAngle, x, n, w) == 0);
     CHECK(luminance(emitted_radiance(l, x, w)->radiance) == 0);
     // A receiver 1 m beside the light and 0.1 m below its plane: the reach radius is
     // 0.1·tan 15° = 0.027 m, so no point of the light reaches it.

@@ -34,6 +34,10 @@
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
 #define OMIS_VERSION_STRING "0.1.0"
 
+/* Limits of every MIS system: techniques combined, channels per sample. */
+#define OMIS_MAX_TECHNIQUES 32
+#define OMIS_MAX_CHANNELS 4
+
 #if defined(_WIN32)
 #define OMIS_API_EXPORT __declspec(dllexport)
 #else
@@ -87,8 +91,8 @@ typedef enum OMISStrategy {
  * returns false for an unknown name. */
 OMIS_API bool omisParseStrategy(const char* name, OMISStrategy* strategy);
 
-/* An estimator combining numTechniques (1..32) techniques over numChannels
- * (1..4) channels; counts[k] = samples of technique k per round (copied). */
+/* An estimator combining numTechniques (1..OMIS_MAX_TECHNIQUES) techniques over
+ * numChannels (1..OMIS_MAX_CHANNELS) channels; counts[k] = samples of technique k per round (copied). */
 OMIS_API OMISEstimator omisNewEstimator(OMISStrategy strategy, int numTechniques,
                                         int numChannels, const int* counts);
 OMIS_API void omisRetainEstimator(OMISEstimator estimator);
@@ -105,14 +109,14 @@ OMIS_API void omisCommitEstimator(OMISEstimator estimator);
  *   pdfs:      numTechniques doubles, p_k(x) for every technique k
  *   f:         numChannels doubles, the integrand
  * Returns false (and adds nothing after the offending sample) on bad input. */
-OMIS_API bool omisEstimatorAddSamples(OMISEstimator estimator, size_t count,
+OMIS_API bool omisAddEstimatorSamples(OMISEstimator estimator, size_t count,
                                       const int* technique, size_t techniqueStride,
                                       const double* pdfs, size_t pdfStride,
                                       const double* f, size_t fStride);
 
 /* Writes numChannels estimates and, if variance is not NULL, their estimated
  * variances. Needs at least one complete round and no partial one. */
-OMIS_API bool omisEstimatorGetResult(OMISEstimator estimator, double* estimate,
+OMIS_API bool omisGetEstimatorResult(OMISEstimator estimator, double* estimate,
                                      double* variance);
 
 /* Forgets every sample; the settings stay. */
@@ -157,7 +161,7 @@ OMIS_API void omisReleaseScene(OMISScene scene);
  *   cornerUVs:     NULL, or 3·numTriangles rows of 2 scalars of `type`
  *   emission:      NULL, or RGB radiance W/(m² sr): the mesh then also emits
  *                  (two-sided, one triangle light per triangle) */
-OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices, OMISDataType type,
+OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices, OMISDataType type,
                                        size_t vertexByteStride, size_t numVertices,
                                        const uint32_t* triangles, size_t numTriangles,
                                        const void* cornerNormals, const void* cornerUVs,
@@ -170,34 +174,34 @@ OMIS_API unsigned int omisSceneAddMesh(OMISScene scene, const void* vertices, OM
 
 /* Rectangle corner + [0,1]·edgeU + [0,1]·edgeV (perpendicular edges);
  * one-sided lights emit toward cross(edgeU, edgeV). */
-OMIS_API unsigned int omisSceneAddRectLight(OMISScene scene, const double corner[3],
+OMIS_API unsigned int omisAddRectLight(OMISScene scene, const double corner[3],
                                             const double edgeU[3], const double edgeV[3],
                                             const double radiance[3], bool twoSided,
                                             double spread);
 /* Ellipse (or disk) center + a·axisA + b·axisB, a² + b² ≤ 1, perpendicular
  * semi-axes; one-sided lights emit toward cross(axisA, axisB). */
-OMIS_API unsigned int omisSceneAddEllipseLight(OMISScene scene, const double center[3],
+OMIS_API unsigned int omisAddEllipseLight(OMISScene scene, const double center[3],
                                                const double axisA[3], const double axisB[3],
                                                const double radiance[3], bool twoSided,
                                                double spread);
 /* radius 0: a delta light (one shadow ray); radius > 0: a disk facing the
  * receiver of radiance intensity/(π radius²). */
-OMIS_API unsigned int omisSceneAddPointLight(OMISScene scene, const double position[3],
+OMIS_API unsigned int omisAddPointLight(OMISScene scene, const double position[3],
                                              const double intensity[3], double radius);
 /* spotSize: full cone angle; spotBlend in [0, 1] (Blender's smoothstep). */
-OMIS_API unsigned int omisSceneAddSpotLight(OMISScene scene, const double position[3],
+OMIS_API unsigned int omisAddSpotLight(OMISScene scene, const double position[3],
                                             const double direction[3],
                                             const double intensity[3], double radius,
                                             double spotSize, double spotBlend);
 /* direction: the way the light travels; angle: full angular diameter (0 =
  * delta light). */
-OMIS_API unsigned int omisSceneAddSunLight(OMISScene scene, const double direction[3],
+OMIS_API unsigned int omisAddSunLight(OMISScene scene, const double direction[3],
                                            const double irradiance[3], double angle);
 /* Constant radiance from every direction; a second call replaces the first. */
-OMIS_API unsigned int omisSceneSetWorld(OMISScene scene, const double radiance[3]);
+OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]);
 /* Blender's cycles.cast_shadow and cycles.use_multiple_importance_sampling
  * (false: the `bsdf` technique does not see the light). Before commit only. */
-OMIS_API void omisSceneSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
+OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
                                      bool visibleToBsdf);
 
 /* The diffuse closure of a mesh's surface when it is baked, evaluated as
@@ -229,6 +233,10 @@ OMIS_API void omisCommitScene(OMISScene scene);
  * call with bufferSize 0 queries the size. Returns 0 on error. */
 OMIS_API size_t omisGetEffectPlan(OMISScene scene, const char* techniques, const int* samples,
                                   char* buffer, size_t bufferSize);
+
+/* Every technique name the ABI accepts (SPEC §3), comma-separated, "bsdf"
+ * first; written and sized as omisGetEffectPlan. */
+OMIS_API size_t omisGetTechniqueNames(char* buffer, size_t bufferSize);
 
 /* What a direct-lighting call did. */
 typedef struct OMISDirectLightingStats {
@@ -324,8 +332,15 @@ OMIS_API bool omisGetBakeResultSize(OMISBakeResult result, int* width, int* heig
  *   "mask":  width·height floats, 1 where baked, 0 in the margin or empty */
 OMIS_API const float* omisGetBakeResultData(OMISBakeResult result, const char* name);
 
+/* Why a bake stopped (a cancelled bake returns no result). */
+typedef enum OMISBakeStatus {
+    OMIS_BAKE_COMPLETE = 0,     /* the sample budget was spent */
+    OMIS_BAKE_TIME_BUDGET = 1,  /* the time budget was reached (on a whole pass) */
+    OMIS_BAKE_NOISE_TARGET = 2  /* every texel met the noise target */
+} OMISBakeStatus;
+
 typedef struct OMISBakeStats {
-    int status;              /* 0 complete, 1 time budget reached, 2 noise target reached */
+    OMISBakeStatus status;
     double seconds;
     uint64_t samples;        /* directions drawn */
     uint64_t raysTraced;

@@ -1,0 +1,296 @@
+// omis.bake_uv, omis.bake_vertices and their BakeResult.
+#include "interrupt.h"
+#include "scene.h"
+
+namespace omis_py {
+namespace {
+
+// A finished bake: arrays with row 0 at the bottom (Blender's Image.pixels
+// order), statistics, and atomic file writers.
+class BakeResult {
+public:
+    BakeResult(OMISBakeResult result, bool lightmap) : ref_(result), lightmap_(lightmap) {
+        if (!omisGetBakeResultSize(ref_.get(), &width_, &height_)) raise_pending_error();
+    }
+
+    py::array value() const { return array("value", 3); }
+    py::array noise() const { return array("noise", 1); }
+    py::array mask() const { return array("mask", 1); }
+
+    py::dict stats() const {
+        OMISBakeStats s{};
+        if (!omisGetBakeResultStats(ref_.get(), &s)) raise_pending_error();
+        static const char* status[] = {"complete", "time budget reached", "noise target reached"};
+        py::dict d;
+        d["status"] = status[std::clamp(int(s.status), 0, 2)];
+        d["seconds"] = s.seconds;
+        d["samples"] = s.samples;
+        d["rays_traced"] = s.raysTraced;
+        d["samples_per_texel"] = s.samplesPerTexel;
+        d["mean_relative_error"] = s.meanRelativeError;
+        d["max_relative_error"] = s.maxRelativeError;
+        d["passes"] = s.passes;
+        d["texels"] = s.texels;
+        d["covered"] = s.covered;
+        d["degenerate_uv_triangles"] = s.degenerateUvTriangles;
+        const size_t n = omisGetBakeResultPlan(ref_.get(), nullptr, 0);
+        std::string plan(n + 1, '\0');
+        omisGetBakeResultPlan(ref_.get(), &plan[0], plan.size());
+        plan.resize(n);
+        d["plan"] = plan;
+        return d;
+    }
+
+    void write_exr(const std::string& path) const {
+        bool ok;
+        {
+            py::gil_scoped_release release;
+            ok = omisWriteBakeResultEXR(ref_.get(), c_string(path, "path"));
+        }
+        if (!ok) raise_pending_error();
+    }
+
+    void write_png(const std::string& path, const std::string& view, const std::string& display,
+                   double exposure) const {
+        c_string(path, "path");
+        c_string(view, "view");
+        c_string(display, "display");
+        if (!std::isfinite(exposure)) bad("exposure", "must be a finite number of stops");
+        bool ok;
+        {
+            py::gil_scoped_release release;
+            ok = omisWriteBakeResultPNG(ref_.get(), path.c_str(), view.c_str(), display.c_str(),
+                                        exposure);
+        }
+        if (!ok) raise_pending_error();
+    }
+
+    std::string repr() const {
+        return "<omis.BakeResult " + std::to_string(width_) + "×" + std::to_string(height_) +
+               (lightmap_ ? " lightmap>" : " points>");
+    }
+
+private:
+    py::array array(const char* name, int channels) const {
+        const float* data = omisGetBakeResultData(ref_.get(), name);
+        if (!data) raise_pending_error();
+        std::vector<py::ssize_t> shape;
+        if (lightmap_) shape = {height_, width_};
+        else shape = {width_};
+        if (channels > 1) shape.push_back(channels);
+        py::array_t<float> out(shape);
+        std::memcpy(out.mutable_data(), data, sizeof(float) * size_t(out.size()));
+        return std::move(out);
+    }
+
+    omis::capi::BakeResultRef ref_;
+    bool lightmap_;
+    int width_ = 0, height_ = 0;
+};
+
+std::uint64_t seed_value(const py::handle& seed_in) {
+    py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
+    if (!index) {
+        PyErr_Clear();
+        bad("seed", "expected a non-negative integer");
+    }
+    const std::uint64_t seed = PyLong_AsUnsignedLongLong(index.ptr());
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        bad("seed", "expected an integer in [0, 2**64)");
+    }
+    return seed;
+}
+
+struct BakeOptions {
+    py::object techniques, counts;
+    long long samples;
+    std::string strategy;
+    double beta, cutoff;
+    py::object time_budget, noise_target;
+    py::object seed;
+    bool smooth_normals;
+    py::object progress;
+    int threads;
+    std::string margin_type = "extend";   // lightmaps: "extend" or "adjacent-faces"
+};
+
+BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
+                    int height, int margin, const BakeOptions& o) {
+    if (!o.progress.is_none() && !PyCallable_Check(o.progress.ptr()))
+        bad("progress", "expected a callable taking the fraction done");
+    omis::capi::BakeRef bake(omisNewBake(scene.get(), target, mesh));
+    if (!bake) raise_pending_error();
+    OMISBake b = bake.get();
+    auto check = [] {
+        const char* message = nullptr;
+        const OMISError code = omisGetError(&message);
+        if (code != OMIS_ERROR_NONE) raise_error(code, message ? message : "bake: error");
+    };
+    if (target == OMIS_BAKE_LIGHTMAP) {
+        if (width < 1 || height < 1)
+            bad("width, height", "must be positive, got " + std::to_string(width) + "×" +
+                                     std::to_string(height));
+        omisSetBakeInt(b, "width", width);
+        omisSetBakeInt(b, "height", height);
+        if (margin < 0) bad("margin", "must not be negative");
+        omisSetBakeInt(b, "margin", margin);
+        if (o.margin_type != "extend" && o.margin_type != "adjacent-faces")
+            bad("margin_type", "expected 'extend' or 'adjacent-faces', got '" + o.margin_type + "'");
+        omisSetBakeString(b, "marginType", o.margin_type.c_str());
+    }
+    if (o.samples < 1) bad("samples", "the sample budget must be at least 1");
+    omisSetBakeInt(b, "samples", o.samples);
+    omisSetBakeInt(b, "seed", std::int64_t(seed_value(o.seed)));
+    omisSetBakeInt(b, "smoothNormals", o.smooth_normals);
+    if (o.threads < 0) bad("threads", "must be ≥ 0 (0 = all cores)");
+    omisSetBakeInt(b, "threads", o.threads);
+    omisSetBakeString(b, "strategy", c_string(o.strategy, "strategy"));
+    omisSetBakeFloat(b, "beta", o.beta);
+    omisSetBakeFloat(b, "cutoff", o.cutoff);
+    if (!o.time_budget.is_none()) {
+        const double t = number_arg(o.time_budget, "time_budget");
+        if (!(t > 0) || !std::isfinite(t)) bad("time_budget", "expected seconds > 0, or None");
+        omisSetBakeFloat(b, "timeBudget", t);
+    }
+    if (!o.noise_target.is_none()) {
+        const double t = number_arg(o.noise_target, "noise_target");
+        if (!(t > 0) || !std::isfinite(t))
+            bad("noise_target", "expected a relative standard error > 0, or None");
+        omisSetBakeFloat(b, "noiseTarget", t);
+    }
+    if (o.techniques.is_none()) {
+        if (!o.counts.is_none())
+            bad("counts", "given without techniques (techniques=None lets the effect plan "
+                          "choose techniques and counts)");
+    } else {
+        // One count per technique per round, 1 each unless given.
+        py::object counts = o.counts;
+        if (counts.is_none()) {
+            std::size_t n;
+            if (py::isinstance<py::str>(o.techniques)) {
+                const std::string list = o.techniques.cast<std::string>();
+                n = 1 + std::count(list.begin(), list.end(), ',');
+            } else {
+                n = py::len(o.techniques);
+            }
+            py::array_t<int> ones(static_cast<py::ssize_t>(n));
+            std::fill(ones.mutable_data(), ones.mutable_data() + n, 1);
+            counts = std::move(ones);
+        }
+        TechniqueArgs t;
+        try {
+            t = technique_args(o.techniques, counts);
+        } catch (const py::value_error& e) {
+            // technique_args names `samples`; here the per-round counts are `counts`.
+            std::string message = e.what();
+            if (message.rfind("samples:", 0) == 0) message = "counts:" + message.substr(8);
+            throw py::value_error(message);
+        }
+        long long per_round = 0;
+        for (std::size_t k = 0; k < t.samples.size(); ++k) {
+            if (t.samples[k] < 0) bad("counts", "entry " + std::to_string(k) + " is negative");
+            per_round += t.samples[k];
+        }
+        // samples is the per-texel budget, spent in whole rounds of sum(counts);
+        // counts the caller wrote must fit it (default counts: at least one round).
+        if (!o.counts.is_none() && per_round > o.samples)
+            bad("samples", "the budget of " + std::to_string(o.samples) +
+                               " per texel is less than one round of counts (" +
+                               std::to_string(per_round) + "); raise samples or lower counts");
+        omisSetBakeString(b, "techniques", t.names.c_str());
+        omisSetBakeCounts(b, t.samples.data(), int(t.samples.size()));
+    }
+    check();
+    omisCommitBake(b);
+    check();
+
+    OMISBakeResult result = nullptr;
+    run_interruptible("bake", o.progress, [&](NativeRun& run) {
+        omisSetBakeProgressFunction(b, on_progress, &run);
+        result = omisExecuteBake(b);
+        return result != nullptr;
+    });
+    return BakeResult(result, target == OMIS_BAKE_LIGHTMAP);
+}
+
+BakeResult bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
+                   const py::object& techniques, const py::object& counts, long long samples,
+                   const std::string& strategy, double beta, double cutoff,
+                   const py::object& time_budget, const py::object& noise_target, int margin,
+                   const py::object& seed, bool smooth_normals, const py::object& progress,
+                   int threads, const std::string& margin_type) {
+    return run_bake(scene, mesh, OMIS_BAKE_LIGHTMAP, width, height, margin,
+                    {techniques, counts, samples, strategy, beta, cutoff, time_budget,
+                     noise_target, seed, smooth_normals, progress, threads, margin_type});
+}
+
+BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::string& domain,
+                         const py::object& techniques, const py::object& counts,
+                         long long samples, const std::string& strategy, double beta,
+                         double cutoff, const py::object& time_budget,
+                         const py::object& noise_target, const py::object& seed,
+                         bool smooth_normals, const py::object& progress, int threads) {
+    OMISBakeTarget target;
+    if (domain == "POINT") target = OMIS_BAKE_VERTICES;
+    else if (domain == "CORNER") target = OMIS_BAKE_CORNERS;
+    else bad("domain", "expected 'POINT' or 'CORNER', got '" + domain + "'");
+    return run_bake(scene, mesh, target, 0, 0, 0,
+                    {techniques, counts, samples, strategy, beta, cutoff, time_budget,
+                     noise_target, seed, smooth_normals, progress, threads});
+}
+
+}  // namespace
+
+void init_bake(py::module_& m) {
+    py::class_<BakeResult>(m, "BakeResult",
+                           "A finished bake: value, noise and mask arrays (row 0 at the bottom, "
+                           "as Blender's Image.pixels), stats, and atomic file writers.")
+        .def_property_readonly("value", &BakeResult::value,
+                               "E_direct/π, float32 (H, W, 3), or (count, 3) for vertex bakes")
+        .def_property_readonly("noise", &BakeResult::noise,
+                               "estimated relative standard error per texel")
+        .def_property_readonly("mask", &BakeResult::mask, "1 where baked, 0 margin or empty")
+        .def_property_readonly("stats", &BakeResult::stats,
+                               "time, samples, rays, errors, passes, status and the effect plan")
+        .def("write_exr", &BakeResult::write_exr, py::arg("path"),
+             "Linear float EXR with channels R, G, B, noise, mask (atomic write).")
+        .def("write_png", &BakeResult::write_png, py::arg("path"), py::arg("view") = "Standard",
+             py::arg("display") = "sRGB", py::arg("exposure") = 0.0,
+             "8-bit PNG through Blender's OCIO view transform (atomic write).")
+        .def("__repr__", &BakeResult::repr);
+
+    m.def("bake_uv", &bake_uv, py::arg("scene"), py::arg("mesh"), py::arg("width"),
+          py::arg("height"), py::kw_only(), py::arg("techniques") = py::none(),
+          py::arg("counts") = py::none(), py::arg("samples") = 64,
+          py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
+          py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
+          py::arg("margin") = 16, py::arg("seed") = 0, py::arg("smooth_normals") = true,
+          py::arg("progress") = py::none(), py::arg("threads") = 0,
+          py::arg("margin_type") = "extend",
+          R"doc(Bakes E_direct/π into a mesh's UV lightmap of width × height texels.
+
+techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
+of each technique per round (1 each by default); samples: the sample budget per
+texel, spent in whole rounds of sum(counts) (rounded down, at least one round; given
+counts whose round exceeds samples are an error). time_budget (s) and noise_target (relative standard error) stop the bake
+earlier. progress(fraction) -> bool is called on this thread; False or Ctrl-C
+raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: worker
+threads (0 = all cores); results do not depend on it. margin (texels) and
+margin_type fill the texels around UV islands as Blender's Bake ▸ Margin does:
+'extend' copies the island's nearest texel, 'adjacent-faces' the texel across
+the UV seam on the face adjacent in 3D (extend where there is none).)doc");
+    m.def("bake_vertices", &bake_vertices, py::arg("scene"), py::arg("mesh"), py::kw_only(),
+          py::arg("domain") = "POINT", py::arg("techniques") = py::none(),
+          py::arg("counts") = py::none(), py::arg("samples") = 64,
+          py::arg("strategy") = "optimal-direct", py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
+          py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
+          py::arg("seed") = 0, py::arg("smooth_normals") = true, py::arg("progress") = py::none(),
+          py::arg("threads") = 0,
+          R"doc(Bakes E_direct/π at a mesh's vertices (domain "POINT") or triangle corners
+("CORNER", 3 per triangle in triangle order), as bake_uv does for texels. As in
+Cycles, each corner is shaded just inside its triangle and a vertex takes the
+mean of its corners.)doc");
+}
+
+}  // namespace omis_py
