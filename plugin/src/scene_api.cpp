@@ -249,15 +249,15 @@ OMIS_API void omisSetMeshReceiver(OMISScene scene, unsigned int mesh, OMISReceiv
     guarded_void([&] {
         auto* s = checked(scene, "scene");
         omis::ReceiverModel model;
-        switch (receiver) {
+        const int value = enum_value(receiver);  // checked before any conversion
+        switch (value) {
             case OMIS_RECEIVER_LAMBERT: model = omis::ReceiverModel::Lambert; break;
             case OMIS_RECEIVER_PRINCIPLED_DIFFUSE:
                 model = omis::ReceiverModel::PrincipledDiffuse;
                 break;
             case OMIS_RECEIVER_OREN_NAYAR: model = omis::ReceiverModel::OrenNayar; break;
             default:
-                throw std::invalid_argument("receiver: unknown value " +
-                                            std::to_string(int(receiver)));
+                throw std::invalid_argument("receiver: unknown value " + std::to_string(value));
         }
         auto lock = s->lock_for_build("omisSetMeshReceiver");
         s->scene.set_mesh_receiver(mesh, omis::make_receiver(model, roughness));
