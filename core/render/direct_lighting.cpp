@@ -89,7 +89,8 @@ struct PointLighting::Impl {
     static Vec3 balance_of(const Estimators& e);
     // Optimal strategies: whether the independent streams say the optimal
     // estimate is noisier here than the balance heuristic's.
-    bool balance_is_better(const Estimators* per, const int* stream_rounds) const;
+    static bool balance_is_better(const Vec3* optimal, const Vec3* balance,
+                                  const int* stream_rounds);
 
     struct Integrand {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
@@ -535,14 +536,14 @@ Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
 // estimator's actual error; the point keeps whichever spreads less (luminance,
 // weighted by the streams' rounds). A selection from 4 streams is noisy, but
 // it picks between two unbiased-or-consistent estimates of the same value.
-bool PointLighting::Impl::balance_is_better(const Estimators* per,
-                                            const int* stream_rounds) const {
+bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* balance,
+                                            const int* stream_rounds) {
     double rounds = 0, mean_o = 0, mean_b = 0;
     double opt[kSampleStreams], bal[kSampleStreams];
     for (int s = 0; s < kSampleStreams; ++s) {
         if (!stream_rounds[s]) continue;
-        opt[s] = luminance(estimate_of(per[s]));
-        bal[s] = luminance(balance_of(per[s]));
+        opt[s] = luminance(optimal[s]);
+        bal[s] = luminance(balance[s]);
         rounds += stream_rounds[s];
         mean_o += opt[s] * stream_rounds[s];
         mean_b += bal[s] * stream_rounds[s];
@@ -645,9 +646,18 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
 
     Vec3 own_variance;
     Vec3 total = delta_per_round || p_.delta.empty() ? Vec3() : delta_lighting(centre, 0.0);
-    const bool use_balance = !active.all.empty() && by_stream &&
-                             is_optimal(p_.settings.strategy) &&
-                             balance_is_better(per, stream_rounds);
+    // Each stream's estimate, solved once: the optimal strategies compare it
+    // with balance's (balance_is_better), and the chosen one's spread is the error.
+    const bool optimal = is_optimal(p_.settings.strategy);
+    Vec3 stream_estimate[K], stream_balance[K];
+    if (by_stream && !active.all.empty())
+        for (int s = 0; s < K; ++s) {
+            if (!stream_rounds[s]) continue;
+            stream_estimate[s] = estimate_of(per[s]);
+            if (optimal) stream_balance[s] = balance_of(per[s]);
+        }
+    const bool use_balance = !active.all.empty() && by_stream && optimal &&
+                             balance_is_better(stream_estimate, stream_balance, stream_rounds);
     if (!active.all.empty()) {
         const Vec3 optimal = estimate_of(all, &own_variance);
         total += use_balance ? balance_of(all) : optimal;
@@ -670,7 +680,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
         for (int s = 0; s < K; ++s) {
             if (!stream_rounds[s]) continue;
             e[s] = delta_sum[s] / double(stream_rounds[s]);
-            if (!active.all.empty()) e[s] += use_balance ? balance_of(per[s]) : estimate_of(per[s]);
+            if (!active.all.empty()) e[s] += use_balance ? stream_balance[s] : stream_estimate[s];
             mean += e[s] * (double(stream_rounds[s]) / rounds);
         }
         error_variance = Vec3();
