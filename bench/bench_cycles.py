@@ -75,14 +75,8 @@ SCENES["demo_room"] = scene_demo
 STRATEGIES = ("cycles", "omis balance", "omis optimal")
 
 
-def log(text=""):
-    print(text, flush=True)
-
-
-def script_args():
-    argv = sys.argv
-    rest = argv[argv.index("--") + 1:] if "--" in argv else []
-    return rest[1:] if rest[:1] == ["--"] else rest
+log = U.log
+script_args = U.args
 
 
 def grey(image):

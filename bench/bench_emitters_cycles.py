@@ -32,14 +32,8 @@ from omis_bake.job import BakeJob  # noqa: E402
 from omis_bake.settings import settings_from  # noqa: E402
 
 
-def log(text=""):
-    print(text, flush=True)
-
-
-def script_args():
-    argv = sys.argv
-    rest = argv[argv.index("--") + 1:] if "--" in argv else []
-    return rest[1:] if rest[:1] == ["--"] else rest
+log = U.log
+script_args = U.args
 
 
 def floor_scene(size):

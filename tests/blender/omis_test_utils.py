@@ -12,9 +12,15 @@ RESULTS = []
 
 
 def args():
-    """The script's own arguments (after Blender's `--`)."""
+    """The script's own arguments (after Blender's `--`, and a second `--` if any)."""
     argv = sys.argv
-    return argv[argv.index("--") + 1:] if "--" in argv else []
+    rest = argv[argv.index("--") + 1:] if "--" in argv else []
+    return rest[1:] if rest[:1] == ["--"] else rest
+
+
+def log(text=""):
+    """A line of a long run's report, shown at once."""
+    print(text, flush=True)
 
 
 def check(condition, message):
