@@ -1,0 +1,56 @@
+#include "bake/convergence.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace omis {
+namespace {
+
+// The fit uses at most this many of the last passes: passes double in size, so
+// four span ~8× the samples, and older passes (dominated by warm-up and by the
+// first pass's error formula) say less about the rate now.
+constexpr int kMaxFitted = 4;
+// Below this spread of times the slope is mostly timing jitter.
+constexpr double kMinTimeSpan = 1.25;
+
+}  // namespace
+
+HalvingPrediction predict_halving(const std::vector<BakePassRecord>& history) {
+    HalvingPrediction p;
+    const double t = history.empty() ? 0.0 : std::max(0.0, history.back().seconds);
+    std::vector<BakePassRecord> used;
+    const std::size_t first = std::max<std::size_t>(
+        1, history.size() > std::size_t(kMaxFitted) ? history.size() - kMaxFitted : 1);
+    for (std::size_t i = first; i < history.size(); ++i) {
+        const BakePassRecord& r = history[i];
+        const bool usable = r.seconds > 0 && std::isfinite(r.seconds) &&
+                            r.mean_relative_error > 0 && std::isfinite(r.mean_relative_error) &&
+                            (used.empty() || r.seconds > used.back().seconds);
+        if (usable) used.push_back(r);
+    }
+    if (used.size() >= 2 && used.back().seconds >= kMinTimeSpan * used.front().seconds) {
+        double mx = 0, my = 0;
+        for (const BakePassRecord& r : used) {
+            mx += std::log(r.seconds);
+            my += std::log(r.mean_relative_error);
+        }
+        mx /= double(used.size());
+        my /= double(used.size());
+        double sxy = 0, sxx = 0;
+        for (const BakePassRecord& r : used) {
+            const double dx = std::log(r.seconds) - mx;
+            sxy += dx * (std::log(r.mean_relative_error) - my);
+            sxx += dx * dx;
+        }
+        const double beta = -sxy / sxx;
+        // An error that does not fall measurably has no halving time to predict.
+        if (std::isfinite(beta) && beta > 0.05) {
+            p.beta = std::clamp(beta, kMinBeta, kMaxBeta);
+            p.passes_fitted = int(used.size());
+        }
+    }
+    p.seconds = t * (std::pow(2.0, 1.0 / p.beta) - 1.0);
+    return p;
+}
+
+}  // namespace omis
