@@ -254,8 +254,8 @@ struct Shaded {
 // ...), so budgets are checked often early on and the per-pass cost (one
 // solve per point) stays small later. Every pass reaches every point: a
 // time budget ends on whole passes (the first always completes; the last
-// shrinks to what the measured cost says fits), so all points end with the
-// same count. Each point's draws continue one low-discrepancy sequence
+// takes the time the measured cost says is left: plan_pass), so all points
+// end with the same count. Each point's draws continue one low-discrepancy sequence
 // across passes.
 class Baker {
 public:
@@ -302,6 +302,7 @@ private:
     // The pass schedule.
     int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
     bool last_done_ = true;
+    bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
     BakeStatus status_ = BakeStatus::Complete;
 };
@@ -447,6 +448,10 @@ void Baker::run_pass(const Pass& pass) {
 // The next pass of the schedule, cut to what the time budget still fits (as
 // the passes so far predict its duration); false when the bake ends here.
 bool Baker::plan_pass(Pass& pass) {
+    if (time_ends_) {
+        status_ = BakeStatus::TimeBudget;
+        return false;
+    }
     pass.first_round = done_rounds_;
     if (done_rounds_ < budget_.full_rounds) {
         pass.rounds = std::min(next_rounds_, budget_.full_rounds - done_rounds_);
@@ -458,8 +463,16 @@ bool Baker::plan_pass(Pass& pass) {
     }
     if (settings_.time_budget > 0 && pass_count_ > 0) {
         const double fits = timer_.fit(settings_.time_budget - elapsed());
-        if (!pass.counts)
-            pass.rounds = int(std::min<double>(pass.rounds, fits / budget_.per_round));
+        const double fit_rounds = fits / budget_.per_round;
+        // When the time left would cut the pass after this one short (less
+        // than 3× this pass fits), this pass takes all of it and is the last:
+        // a small final pass adds few samples, and as its estimate joins the
+        // others' as an independent one, its poor error raises the estimate.
+        if (!pass.counts && fit_rounds < 3.0 * pass.rounds &&
+            fit_rounds < budget_.full_rounds - done_rounds_) {
+            pass.rounds = int(std::max(0.0, fit_rounds));
+            time_ends_ = true;
+        }
         if (pass.rounds < 1 || (pass.counts && fits < budget_.last_samples)) {
             status_ = BakeStatus::TimeBudget;
             return false;
