@@ -310,7 +310,8 @@ void init_bake(py::module_& m) {
                                "estimated relative standard error per texel")
         .def_property_readonly("mask", &BakeResult::mask, "1 where baked, 0 margin or empty")
         .def_property_readonly("stats", &BakeResult::stats,
-                               "time, samples, rays, errors, passes, status and the effect plan")
+                               "time, samples, rays, errors, passes, status, the effect plan, the "
+                               "convergence per pass and the halving time predicted from it")
         .def("write_exr", &BakeResult::write_exr, py::arg("path"),
              "Linear float EXR with channels R, G, B, noise, mask (atomic write).")
         .def("write_png", &BakeResult::write_png, py::arg("path"), py::arg("view") = "Standard",

@@ -9,9 +9,10 @@ namespace {
 // The fit uses at most this many of the last passes: passes double in size, so
 // four span ~8× the samples, and older passes (dominated by warm-up and by the
 // first pass's error formula) say less about the rate now.
-constexpr int kMaxFitted = 4;
-// Below this spread of times the slope is mostly timing jitter.
-constexpr double kMinTimeSpan = 1.25;
+constexpr std::size_t kMaxFitted = 4;
+// Below these spreads of time and samples the slope is mostly timing jitter
+// (e.g. a sample budget's last round, a pass of its own, adds little).
+constexpr double kMinTimeSpan = 1.25, kMinSamplesSpan = 1.5;
 
 }  // namespace
 
@@ -19,16 +20,19 @@ HalvingPrediction predict_halving(const std::vector<BakePassRecord>& history) {
     HalvingPrediction p;
     const double t = history.empty() ? 0.0 : std::max(0.0, history.back().seconds);
     std::vector<BakePassRecord> used;
-    const std::size_t first = std::max<std::size_t>(
-        1, history.size() > std::size_t(kMaxFitted) ? history.size() - kMaxFitted : 1);
-    for (std::size_t i = first; i < history.size(); ++i) {
+    // The first pass only when there are just two.
+    const std::size_t n = history.size();
+    const std::size_t first = n <= 2 ? 0 : std::max<std::size_t>(1, n > kMaxFitted ? n - kMaxFitted : 1);
+    for (std::size_t i = first; i < n; ++i) {
         const BakePassRecord& r = history[i];
         const bool usable = r.seconds > 0 && std::isfinite(r.seconds) &&
                             r.mean_relative_error > 0 && std::isfinite(r.mean_relative_error) &&
                             (used.empty() || r.seconds > used.back().seconds);
         if (usable) used.push_back(r);
     }
-    if (used.size() >= 2 && used.back().seconds >= kMinTimeSpan * used.front().seconds) {
+    if (used.size() >= 2 && used.back().seconds >= kMinTimeSpan * used.front().seconds &&
+        used.back().samples_per_texel >= kMinSamplesSpan * used.front().samples_per_texel &&
+        used.front().samples_per_texel > 0) {
         double mx = 0, my = 0;
         for (const BakePassRecord& r : used) {
             mx += std::log(r.seconds);

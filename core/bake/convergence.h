@@ -21,11 +21,13 @@ struct HalvingPrediction {
     bool measured() const { return passes_fitted >= 2; }
 };
 
-// β from a least-squares line through (ln t, ln error) of the later passes (the
-// first is skipped: its error comes from one stream's independent-draw formula
-// and its time holds the warm-up). Too few usable passes, or an error that does
-// not fall, give β = 0.5 with passes_fitted = 0; a fitted β is kept within
-// [kMinBeta, kMaxBeta]. t is the last pass's sampling time.
+// β from a least-squares line through (ln t, ln error) of the last passes (at
+// most four; the first pass only when there are just two: its time holds the
+// warm-up, and a one-round first pass's error comes from the independent-draw
+// formula). Fewer than two usable passes, passes too close in time or samples
+// (< 1.25× apart, < 1.5×), or an error that does not fall give β = 0.5 with
+// passes_fitted = 0; a fitted β is kept within [kMinBeta, kMaxBeta]. t is the
+// last pass's sampling time.
 constexpr double kMinBeta = 0.25, kMaxBeta = 1.5;
 HalvingPrediction predict_halving(const std::vector<BakePassRecord>& history);
 

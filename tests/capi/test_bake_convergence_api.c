@@ -26,9 +26,16 @@ static void synthetic(void) {
     CHECK(omisPredictBakeHalving(passes, 6, &h));
     CHECK(fabs(h.beta - 0.75) < 1e-9 && h.passesFitted == 4);
     CHECK(fabs(h.seconds - 3.2 * (pow(2.0, 1 / 0.75) - 1)) < 1e-9);
-    /* Two passes: one point after the first, beta = 0.5 assumed (3× the time). */
+    /* Two passes: both fitted. One: beta = 0.5 assumed (3× the time again). */
     CHECK(omisPredictBakeHalving(passes, 2, &h));
-    CHECK(h.passesFitted == 0 && h.beta == 0.5 && fabs(h.seconds - 0.6) < 1e-12);
+    CHECK(h.passesFitted == 2 && fabs(h.beta - 0.75) < 1e-9);
+    CHECK(omisPredictBakeHalving(passes, 1, &h));
+    CHECK(h.passesFitted == 0 && h.beta == 0.5 && fabs(h.seconds - 0.3) < 1e-12);
+    /* A second pass of a few more samples (a sample budget's last round) says
+     * nothing about the rate. */
+    passes[1].samplesPerTexel = 1.2 * passes[0].samplesPerTexel;
+    CHECK(omisPredictBakeHalving(passes, 2, &h) && h.passesFitted == 0);
+    power_law(passes, 6, 0.75);
     CHECK(omisPredictBakeHalving(NULL, 0, &h) && h.seconds == 0 && h.passesFitted == 0);
     /* Bad input names the argument. */
     CHECK(!omisPredictBakeHalving(NULL, 3, &h));

@@ -54,14 +54,16 @@ def test_noisy_history_within_its_standard_error():
 
 
 def test_too_few_passes_assume_independent_draws():
-    # 0, 1 or 2 passes leave at most one point after the first: β = 0.5 assumed,
-    # so halving takes 4× the samples, 3× the time again (an upper bound).
-    for n in (0, 1, 2):
+    # 0 or 1 pass: β = 0.5 assumed, so halving takes 4× the samples, 3× the time
+    # again (an upper bound). Two passes are the fewest a fit uses.
+    for n in (0, 1):
         h = omis.predict_halving(history(0.9, DOUBLING[:n]))
         assert not h["halving_measured"] and h["halving_passes_fitted"] == 0
         assert h["halving_beta"] == 0.5
         t = DOUBLING[n - 1] if n else 0.0
         assert h["halving_seconds"] == pytest.approx(3.0 * t)
+    h = omis.predict_halving(history(0.9, DOUBLING[:2]))
+    assert h["halving_passes_fitted"] == 2 and h["halving_beta"] == pytest.approx(0.9)
 
 
 def test_unusable_histories_fall_back():
@@ -69,6 +71,10 @@ def test_unusable_histories_fall_back():
     assert not omis.predict_halving(flat)["halving_measured"]        # error does not fall
     short = history(0.8, [1.0, 1.05, 1.1, 1.15])                       # times span < 1.25×
     assert not omis.predict_halving(short)["halving_measured"]
+    # A sample budget's last round as a pass of its own: few more samples.
+    tail = history(0.8, [1.0, 2.0])
+    tail[1]["samples_per_texel"] = 1.2 * tail[0]["samples_per_texel"]
+    assert not omis.predict_halving(tail)["halving_measured"]
     zeros = [dict(seconds=t, mean_relative_error=0.0) for t in DOUBLING]  # nothing to halve
     h = omis.predict_halving(zeros)
     assert not h["halving_measured"] and h["halving_beta"] == 0.5

@@ -368,11 +368,12 @@ typedef struct OMISBakePass {
 OMIS_API int omisGetBakeResultConvergence(OMISBakeResult result, OMISBakePass* passes,
                                           int capacity);
 /* What halving the mean error would cost, from error ∝ t^(-beta) fitted (least
- * squares in log-log) over the later passes, t the sampling time: seconds =
- * t·(2^(1/beta) − 1) more. With fewer than 3 passes (or an error that does not
- * fall) beta = 0.5 is assumed — independent draws, which omis' low-discrepancy
- * draws converge at least as fast as: then seconds is an upper bound and
- * passesFitted is 0. A fitted beta is kept within [0.25, 1.5]. */
+ * squares in log-log) over the last passes (at most 4; the first only when
+ * there are 2), t the sampling time: seconds = t·(2^(1/beta) − 1) more. With a
+ * single pass, passes too close (< 1.25× apart in time or < 1.5× in samples) or
+ * an error that does not fall, beta = 0.5 is assumed — independent draws, which
+ * omis' low-discrepancy draws converge at least as fast as: then seconds is an
+ * upper bound and passesFitted is 0. A fitted beta is kept within [0.25, 1.5]. */
 typedef struct OMISBakeHalving {
     double seconds;   /* more sampling time to halve the mean relative error */
     double beta;      /* the convergence exponent used */
