@@ -119,7 +119,7 @@ def _draw_last(layout, props):
     else:
         # One pass (a sample budget alone) shows no convergence: the 1/√n bound.
         _figure(box, "Half the error", f"≤ {more} more")
-        _figure(box, "", "measured with a Time Limit")
+        _figure(box, "", "(a Time Limit measures it)")
 
 
 def draw_omis(layout, context):
