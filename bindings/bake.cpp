@@ -5,6 +5,50 @@
 namespace omis_py {
 namespace {
 
+py::list convergence_list(const std::vector<OMISBakePass>& passes) {
+    py::list out;
+    for (const OMISBakePass& p : passes) {
+        py::dict r;
+        r["samples_per_texel"] = p.samplesPerTexel;
+        r["seconds"] = p.seconds;
+        r["mean_relative_error"] = p.meanRelativeError;
+        out.append(r);
+    }
+    return out;
+}
+
+void add_halving(py::dict& d, const OMISBakeHalving& h) {
+    d["halving_seconds"] = h.seconds;
+    d["halving_beta"] = h.beta;
+    d["halving_passes_fitted"] = h.passesFitted;
+    d["halving_measured"] = h.passesFitted >= 2;
+}
+
+// omis.predict_halving: the prediction from any history, as records with the
+// keys of stats["convergence"].
+py::dict predict_halving(const py::iterable& history) {
+    std::vector<OMISBakePass> passes;
+    for (const py::handle& item : history) {
+        if (!py::isinstance<py::dict>(item))
+            bad("history", "expected dicts with samples_per_texel, seconds, mean_relative_error");
+        const py::dict r = py::reinterpret_borrow<py::dict>(item);
+        for (const char* key : {"seconds", "mean_relative_error"})
+            if (!r.contains(key)) bad("history", std::string("a record has no '") + key + "'");
+        OMISBakePass p{};
+        p.samplesPerTexel = r.contains("samples_per_texel")
+                                ? number_arg(r["samples_per_texel"], "samples_per_texel")
+                                : 0.0;
+        p.seconds = number_arg(r["seconds"], "seconds");
+        p.meanRelativeError = number_arg(r["mean_relative_error"], "mean_relative_error");
+        passes.push_back(p);
+    }
+    OMISBakeHalving h{};
+    if (!omisPredictBakeHalving(passes.data(), int(passes.size()), &h)) raise_pending_error();
+    py::dict d;
+    add_halving(d, h);
+    return d;
+}
+
 // A finished bake: arrays with row 0 at the bottom (Blender's Image.pixels
 // order), statistics, and atomic file writers.
 class BakeResult {
@@ -38,6 +82,7 @@ public:
         omisGetBakeResultPlan(ref_.get(), &plan[0], plan.size());
         plan.resize(n);
         d["plan"] = plan;
+        add_convergence(d);
         return d;
     }
 
@@ -71,6 +116,19 @@ public:
     }
 
 private:
+    // The history per pass and the halving prediction from it (omis.h).
+    void add_convergence(py::dict& d) const {
+        const int n = omisGetBakeResultConvergence(ref_.get(), nullptr, 0);
+        if (n < 0) raise_pending_error();
+        std::vector<OMISBakePass> passes(std::size_t(n) + 1);
+        omisGetBakeResultConvergence(ref_.get(), passes.data(), n);
+        passes.resize(std::size_t(n));
+        OMISBakeHalving h{};
+        if (!omisGetBakeResultHalving(ref_.get(), &h)) raise_pending_error();
+        d["convergence"] = convergence_list(passes);
+        add_halving(d, h);
+    }
+
     py::array array(const char* name, int channels) const {
         const float* data = omisGetBakeResultData(ref_.get(), name);
         if (!data) raise_pending_error();
@@ -252,7 +310,8 @@ void init_bake(py::module_& m) {
                                "estimated relative standard error per texel")
         .def_property_readonly("mask", &BakeResult::mask, "1 where baked, 0 margin or empty")
         .def_property_readonly("stats", &BakeResult::stats,
-                               "time, samples, rays, errors, passes, status and the effect plan")
+                               "time, samples, rays, errors, passes, status, the effect plan, the "
+                               "convergence per pass and the halving time predicted from it")
         .def("write_exr", &BakeResult::write_exr, py::arg("path"),
              "Linear float EXR with channels R, G, B, noise, mask (atomic write).")
         .def("write_png", &BakeResult::write_png, py::arg("path"), py::arg("view") = "Standard",
@@ -280,6 +339,13 @@ threads (0 = all cores); results do not depend on it. margin (texels) and
 margin_type fill the texels around UV islands as Blender's Bake ▸ Margin does:
 'extend' copies the island's nearest texel, 'adjacent-faces' the texel across
 the UV seam on the face adjacent in 3D (extend where there is none).)doc");
+    m.def("predict_halving", &predict_halving, py::arg("history"),
+          R"doc(What halving a bake's mean relative error would cost, from a history of
+passes (dicts as in BakeResult.stats["convergence"]: seconds, mean_relative_error,
+samples_per_texel): error ∝ t^(-beta) fitted over the later passes. Returns
+halving_seconds (more sampling time: t·(2^(1/beta) − 1)), halving_beta,
+halving_passes_fitted and halving_measured (False: too few passes, beta = 0.5
+assumed, an upper bound).)doc");
     m.def("bake_vertices", &bake_vertices, py::arg("scene"), py::arg("mesh"), py::kw_only(),
           py::arg("domain") = "POINT", py::arg("techniques") = py::none(),
           py::arg("counts") = py::none(), py::arg("samples") = 64,

@@ -15,9 +15,10 @@ from ._omis import (
     bake_vertices,
     combine,
     direct_lighting,
+    predict_halving,
 )
 
 __all__ = [
     "__version__", "combine", "STRATEGIES", "TECHNIQUES", "Scene", "direct_lighting", "Cancelled",
-    "bake_uv", "bake_vertices", "BakeResult",
+    "bake_uv", "bake_vertices", "BakeResult", "predict_halving",
 ]

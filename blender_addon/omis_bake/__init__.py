@@ -42,7 +42,6 @@ def _classes():
 
 def register():
     native.load()
-    ui.prepare()
     for cls in _classes():
         bpy.utils.register_class(cls)
     bpy.types.Scene.omis = bpy.props.PointerProperty(type=settings.OMIS_PG_settings)

@@ -207,6 +207,7 @@ class BakeJob:
         store.last_mean_error = stats["mean_relative_error"]
         store.last_error_p95 = stats["error_p95"]
         store.last_halving_seconds = stats["halving_seconds"]
+        store.last_halving_measured = stats["halving_measured"]
         store.last_plan = stats["plan"]
         return stats
 
@@ -241,7 +242,7 @@ class BakeJob:
             "status": status,
             "seconds": self.seconds,
             "bake_seconds": sampling,
-            **accuracy_cost(errors, self.seconds, sampling),
+            **accuracy_cost(errors, self.seconds, [u.stats for u in units]),
             "samples": samples,
             "rays_traced": sum(u.stats.get("rays_traced", 0) for u in units),
             "covered": covered,
@@ -263,27 +264,34 @@ class BakeJob:
         }
 
 
-def accuracy_cost(errors, seconds, sampling_seconds):
+def accuracy_cost(errors, seconds, unit_stats):
     """What the accuracy reached cost, and what halving it would cost.
 
     errors: the texels' relative errors (estimated standard error / value);
-    seconds: the whole bake; sampling_seconds: the part spent in the native bakes.
-    An independent-sample Monte Carlo estimate's standard error falls as 1/√n;
-    omis' draws follow a randomized low-discrepancy sequence, whose error falls
-    at least that fast (measured: 16 → 64 samples gave 0.31× the error on the
-    test floor, not 0.5×). With the samples (rays) per second unchanged, half
-    the error therefore takes at most 4× the samples, i.e. at most 3× the
-    sampling time again (the fixed cost of export and write-back is not
-    repeated): an upper bound, so an artist never waits longer than told.
+    seconds: the whole bake; unit_stats: the native bakes' statistics (omis'
+    BakeResult.stats), one per object part.
+
+    Each native bake predicts from its own measured convergence — error ∝ t^(-β)
+    fitted over its later passes — the sampling time that would halve its mean
+    error (halving_seconds). Halving every part's error halves the mean over all
+    texels, so the bake needs their sum; export and write-back are not repeated.
+    A bake with a sample budget alone runs one pass and measures no convergence:
+    it assumes β = 0.5 (error ∝ 1/√n, independent draws), and since omis'
+    low-discrepancy draws converge at least that fast (16 → 64 samples gave 0.31×
+    the error on the test floor, not 0.5×) the figure is then an upper bound;
+    halving_measured says which.
     """
     errors = np.asarray(errors, np.float64)
     has = errors.size > 0
+    halving = float(sum(u.get("halving_seconds", 0.0) for u in unit_stats))
     return {
         "error_mean": float(errors.mean()) if has else 0.0,
         # The smallest error that 95 % of the texels do not exceed (no interpolation).
         "error_p95": float(np.percentile(errors, 95, method='higher')) if has else 0.0,
-        "halving_seconds": 3.0 * float(sampling_seconds),
-        "halving_total_seconds": float(seconds) + 3.0 * float(sampling_seconds),
+        "halving_seconds": halving,
+        "halving_total_seconds": float(seconds) + halving,
+        "halving_measured": bool(unit_stats) and all(u.get("halving_measured", False)
+                                                     for u in unit_stats),
     }
 
 
@@ -320,7 +328,9 @@ def bake(context, objects=None, *, progress=None, **settings):
     returning False cancels. Raises BakeError or Cancelled; on either, no image
     or attribute is changed. Runs synchronously (also in background mode).
     The returned dict includes error_mean and error_p95 (the texels' relative
-    error), seconds, and halving_seconds (extra time to halve the error).
+    error), seconds, halving_seconds (extra sampling time to halve the mean error)
+    and halving_measured (True: estimated from the bake's measured convergence,
+    which a time limit or noise threshold gives; False: the 1/√n upper bound).
     """
     from .settings import settings_from
     try:

@@ -41,9 +41,11 @@ def format_seconds(seconds):
 
 def accuracy_line(stats):
     """The accuracy reached and what halving it costs, in one sentence."""
+    more = format_seconds(stats["halving_seconds"])
+    halving = (f"an estimated {more} more (from the bake's convergence)"
+               if stats["halving_measured"] else f"at most {more} more")
     return (f'error {100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
-            f'for 95 % of texels; halving it: at most {format_seconds(stats["halving_seconds"])} '
-            f'more')
+            f'for 95 % of texels; halving it: {halving}')
 
 
 def _report_stats(op, stats):

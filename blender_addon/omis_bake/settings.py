@@ -175,8 +175,14 @@ def _result_props():
             description="95 % of the baked texels had at most this relative error"),
         "last_halving_seconds": FloatProperty(
             name="Last Halving Time", default=0.0,
-            description="Estimated extra seconds of sampling that would halve the error "
-                        "(noise falls as 1/√time)"),
+            description="Extra seconds of sampling that would halve the mean error: "
+                        "estimated from the bake's measured convergence (passes taken under "
+                        "a time limit or noise threshold), else an upper bound from the "
+                        "1/√time rate"),
+        "last_halving_measured": BoolProperty(
+            name="Last Halving Time Measured", default=False,
+            description="Whether the halving time comes from the last bake's measured "
+                        "convergence (else it is the 1/√time upper bound)"),
         "last_plan": StringProperty(name="Last Sampling Plan", default="",
                                     description="The sampling methods and sample counts "
                                                 "chosen (the effect plan)"),

@@ -1,15 +1,12 @@
-"""The panel, under every render engine: under Cycles inside Render Properties ▸ Bake
-(whose Output and Margin subpanels hold the target, clear and margin settings omis
-reads), elsewhere (EEVEE, Workbench, …) a Render Properties panel of its own that
-also shows those settings of scene.render.bake."""
+"""The panel: Render Properties ▸ Bake (omis), one panel under every render engine
+with its one Bake button, omis' sampling settings and the settings of
+scene.render.bake omis reads (target, clear, margin, selected to active — under
+Cycles its own Bake panel shows the same settings)."""
 
 import bpy
 
 from . import native, operators
 from .settings import settings_from
-
-CYCLES_BAKE_PANEL = "CYCLES_RENDER_PT_bake"
-
 
 def _wrapped(layout, text, width=60, icon='NONE'):
     words, line, first = text.split(), "", True
@@ -93,7 +90,8 @@ def _draw_sampling(layout, props):
 
 
 def _draw_output(layout, context):
-    """Blender's own bake output settings (under Cycles its subpanels show them)."""
+    """Blender's own bake output settings, which omis reads (under Cycles its Bake
+    panel's subpanels show the same settings)."""
     bake = context.scene.render.bake
     col = layout.column()
     col.prop(bake, "target")
@@ -115,11 +113,16 @@ def _draw_last(layout, props):
     _figure(box, "Samples per texel", f"{props.last_samples_per_texel:.1f}")
     _figure(box, "Error (mean)", f"{100 * props.last_mean_error:.2f} %")
     _figure(box, "Error (95 % of texels)", f"≤ {100 * props.last_error_p95:.2f} %")
-    _figure(box, "Half the error", f"≤ {operators.format_seconds(props.last_halving_seconds)}"
-                                   f" more")
+    more = operators.format_seconds(props.last_halving_seconds)
+    if props.last_halving_measured:
+        _figure(box, "Half the error", f"{more} more (estimated)")
+    else:
+        # One pass (a sample budget alone) shows no convergence: the 1/√n bound.
+        _figure(box, "Half the error", f"≤ {more} more")
+        _figure(box, "", "(a Time Limit measures it)")
 
 
-def draw_omis(layout, context, with_output):
+def draw_omis(layout, context):
     layout.use_property_split = True
     layout.use_property_decorate = False
     props = context.scene.omis
@@ -140,61 +143,32 @@ def draw_omis(layout, context, with_output):
     row.operator("omis.bake", text="Bake", icon='RENDER_STILL')
 
     _draw_sampling(layout, props)
-    if with_output:
-        _draw_output(layout, context)
+    _draw_output(layout, context)
     if props.last_status:
         _draw_last(layout, props)
 
 
 class OMIS_PT_bake(bpy.types.Panel):
-    """Under Cycles: a subpanel of Render Properties ▸ Bake."""
-    bl_label = "omis: Low-Noise Direct Light"
-    bl_space_type = 'PROPERTIES'
-    bl_region_type = 'WINDOW'
-    bl_context = "render"
-    # bl_parent_id is set in prepare(): Cycles' Bake panel when it exists.
-    COMPAT_ENGINES = {'CYCLES'}
-    available = True   # False when Cycles is absent: then OMIS_PT_bake_engines shows
-
-    @classmethod
-    def poll(cls, context):
-        return cls.available and context.engine in cls.COMPAT_ENGINES
-
-    def draw_header(self, context):
-        _draw_header(self, context)
-
-    def draw(self, context):
-        draw_omis(self.layout, context, with_output=False)
-
-
-class OMIS_PT_bake_engines(bpy.types.Panel):
-    """Under every other engine (EEVEE, Workbench, …): a Render Properties panel of its
-    own, with Blender's bake output settings, since Cycles' Bake panel is not there."""
+    """Render Properties ▸ omis Bake, under every render engine: a panel of its own with
+    its one Bake button. Cycles' Bake panel keeps Cycles' own button (it bakes with
+    Cycles); nesting omis inside it put two Bake buttons in one panel."""
     bl_label = "Bake (omis: Low-Noise Direct Light)"
     bl_space_type = 'PROPERTIES'
     bl_region_type = 'WINDOW'
     bl_context = "render"
+    # Below the engine's own panels (Cycles' Bake among them), like Blender's own
+    # later additions; a panel without bl_parent_id is top-level.
+    bl_order = 100
 
     @classmethod
     def poll(cls, context):
-        return not OMIS_PT_bake.poll(context)
+        return True   # omis needs nothing from the render engine
 
     def draw_header(self, context):
         _draw_header(self, context)
 
     def draw(self, context):
-        draw_omis(self.layout, context, with_output=True)
+        draw_omis(self.layout, context)
 
 
-classes = (OMIS_PT_bake, OMIS_PT_bake_engines)
-
-
-def prepare():
-    """Hangs the Cycles panel under Cycles' Bake panel when Cycles is there."""
-    if hasattr(bpy.types, CYCLES_BAKE_PANEL):
-        OMIS_PT_bake.bl_parent_id = CYCLES_BAKE_PANEL
-        OMIS_PT_bake.available = True
-    else:
-        OMIS_PT_bake.available = False
-        if "bl_parent_id" in OMIS_PT_bake.__dict__:
-            del OMIS_PT_bake.bl_parent_id
+classes = (OMIS_PT_bake,)

@@ -175,6 +175,439 @@ private:
     int n_ = 0;
 };
 
+void validate(const Scene& scene, const BakeSettings& in) {
+    if (!scene.committed())
+        throw std::logic_error("scene: not committed (call commit before baking)");
+    if (in.mesh >= scene.geometry().num_meshes())
+        throw std::invalid_argument("mesh: id " + std::to_string(in.mesh) + " is out of range (" +
+                                    std::to_string(scene.geometry().num_meshes()) + " meshes)");
+    if (in.margin < 0) throw std::invalid_argument("margin: must not be negative");
+    if (in.time_budget < 0 || !std::isfinite(in.time_budget))
+        throw std::invalid_argument("time_budget: must be a non-negative number of seconds");
+    if (in.noise_target < 0 || !std::isfinite(in.noise_target))
+        throw std::invalid_argument("noise_target: must be a non-negative relative error");
+    if (in.rounds_per_pass < 1) throw std::invalid_argument("rounds_per_pass: must be ≥ 1");
+}
+
+// Where to shade: a lightmap's texels (those inside the UV layout are covered)
+// or a mesh's triangle corners, visited in tiles.
+struct BakeLayout {
+    BakeLayout(const Mesh& mesh, const BakeSettings& settings) : target(settings.target) {
+        if (target == BakeTarget::Lightmap) {
+            coverage = rasterize_uv(mesh, settings.width, settings.height);
+            width = settings.width;
+            height = settings.height;
+            count = coverage.triangle.size();
+            tiles_x = (width + kTile - 1) / kTile;
+            tiles_y = (height + kTile - 1) / kTile;
+        } else {
+            points = corner_points(mesh, settings.smooth_normals);
+            width = int(points.size());
+            height = 1;
+            count = points.size();
+            tiles_x = int((count + kTile * kTile - 1) / (kTile * kTile));
+            tiles_y = 1;
+        }
+        tiles = std::size_t(tiles_x) * tiles_y;
+    }
+    bool lightmap() const { return target == BakeTarget::Lightmap; }
+    bool covered(std::size_t i) const { return !lightmap() || coverage.is_covered(i); }
+    template <class Visit>
+    void tile_points(std::size_t tile, Visit&& visit) const {
+        if (!lightmap()) {
+            const std::size_t begin = tile * kTile * kTile;
+            for (std::size_t i = begin; i < std::min(count, begin + kTile * kTile); ++i) visit(i);
+            return;
+        }
+        const int tx = int(tile % tiles_x), ty = int(tile / tiles_x);
+        for (int y = ty * kTile; y < std::min(height, (ty + 1) * kTile); ++y)
+            for (int x = tx * kTile; x < std::min(width, (tx + 1) * kTile); ++x)
+                visit(std::size_t(y) * width + x);
+    }
+
+    BakeTarget target;
+    UvCoverage coverage;
+    std::vector<SurfacePoint> points;  // vertex bakes only
+    int width = 0, height = 0, tiles_x = 0, tiles_y = 0;
+    std::size_t count = 0, tiles = 0;
+};
+
+// One pass over every point that is not done.
+struct Pass {
+    int first_round = 0, rounds = 0;
+    const int* counts = nullptr;  // null: the settings' counts
+    std::uint32_t samples = 0;    // per point
+};
+
+// A point's estimate of one pass, before it joins the running mean.
+struct Shaded {
+    std::size_t i;
+    double value[3];
+    double stream_variance, own_variance;  // luminance
+};
+
+// One bake of one mesh: the layout, the lighting, the points' running state,
+// the passes and what they leave in the result.
+//
+// Passes: all rounds at once unless a time or noise budget wants to look
+// between passes; then passes double in size (rounds_per_pass, twice that,
+// ...), so budgets are checked often early on and the per-pass cost (one
+// solve per point) stays small later. Every pass reaches every point: a
+// time budget ends on whole passes (the first always completes; the last
+// takes the time the measured cost says is left: plan_pass), so all points
+// end with the same count. Each point's draws continue one low-discrepancy sequence
+// across passes.
+class Baker {
+public:
+    Baker(const Scene& scene, const BakeSettings& settings, const BakeProgress& progress,
+          Clock::time_point start);
+    BakeResult run();
+
+private:
+    double elapsed() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+    void report_progress();
+    bool keep_going();
+    void shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
+                     std::vector<Shaded>& out);
+    void accumulate(const Pass& pass, const std::vector<Shaded>& tile);
+    void run_pass(const Pass& pass);
+    bool plan_pass(Pass& pass);
+    void run_passes();
+    bool noise_target_met() const;
+    void record_pass(double sampling_start);
+    void write_outputs();
+    void fill_margin();
+    void fill_stats();
+
+    const Mesh& mesh_;
+    BakeSettings settings_;
+    const BakeProgress& progress_;
+    Clock::time_point start_;
+    BakeLayout layout_;
+    LightingContext context_;
+    SampleBudget budget_;
+    bool progressive_;
+    BakeResult result_;
+    std::vector<PointState> state_;
+    tbb::enumerable_thread_specific<PointLighting> shaders_;
+
+    // Progress counts shaded samples; cancel is checked at every point so a
+    // request stops the bake within one point's work.
+    double total_work_ = 1;
+    std::atomic<std::size_t> shaded_{0};
+    std::atomic<bool> cancel_{false};
+    std::atomic<double> last_report_{0};
+    std::mutex report_;
+
+    // The pass schedule.
+    int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
+    bool last_done_ = true;
+    bool time_ends_ = false;  // the last pass took the time left
+    PassTimer timer_;
+    BakeStatus status_ = BakeStatus::Complete;
+};
+
+BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
+    settings.lighting.receiver = scene.mesh_receiver(settings.mesh);  // render/receiver.h
+    return settings;
+}
+
+Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgress& progress,
+             Clock::time_point start)
+    : mesh_(scene.geometry().mesh(settings.mesh)),
+      settings_(with_receiver(scene, settings)),
+      progress_(progress),
+      start_(start),
+      layout_(mesh_, settings_),
+      context_(scene, settings_.lighting),
+      budget_(plan_samples(context_, settings_.samples, settings_.lighting.rounds)),
+      progressive_(settings_.time_budget > 0 || settings_.noise_target > 0),
+      state_(layout_.count),
+      shaders_([this] { return PointLighting(context_); }) {
+    result_.width = layout_.width;
+    result_.height = layout_.height;
+    result_.value.assign(layout_.count * 3, 0.f);  // the running means
+    // Uncovered texels are never shaded: they count as done for the noise target.
+    std::size_t to_shade = 0;
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) state_[i].done = true;
+        to_shade += layout_.covered(i);
+    }
+    const long long samples_per_point =
+        (long long)budget_.full_rounds * budget_.per_round + budget_.last_samples;
+    total_work_ = double(std::max<std::size_t>(1, to_shade)) *
+                  double(std::max<long long>(1, samples_per_point));
+    context_.keep_going = [this] { return keep_going(); };
+
+    // Under a time budget the first pass — the part a budget cannot cut — is
+    // a single round, so small budgets are not eaten by it.
+    // (Optimal strategies solve per pass, and a one-round solve is poor:
+    // they keep rounds_per_pass.)
+    const bool single_first =
+        settings_.time_budget > 0 && !is_optimal(settings_.lighting.strategy);
+    next_rounds_ = !progressive_ ? budget_.full_rounds
+                   : single_first ? 1
+                                  : settings_.rounds_per_pass;
+    last_done_ = budget_.last.empty();
+}
+
+void Baker::report_progress() {
+    double fraction = double(shaded_.load(std::memory_order_relaxed)) / total_work_;
+    if (settings_.time_budget > 0) fraction = std::max(fraction, elapsed() / settings_.time_budget);
+    std::unique_lock<std::mutex> lock(report_, std::try_to_lock);
+    if (lock.owns_lock() && !progress_(std::min(1.0, fraction))) cancel_ = true;
+}
+
+// Inside a point with huge counts: the cancel check, and progress at most
+// every 50 ms (time budgets end on whole passes, never inside a point).
+bool Baker::keep_going() {
+    const double now = elapsed();
+    if (progress_ && now - last_report_.load(std::memory_order_relaxed) >= 0.05) {
+        last_report_ = now;
+        report_progress();
+    }
+    return !cancel_.load(std::memory_order_relaxed);
+}
+
+void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
+                        std::vector<Shaded>& out) {
+    if (!layout_.covered(i) || state_[i].done || cancel_.load(std::memory_order_relaxed)) return;
+    Shaded r{i, {}, 0, 0};
+    double variance[3], own[3];
+    try {
+        if (layout_.lightmap()) {
+            const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals);
+            shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint, r.value,
+                         variance, pass.counts, own);
+        } else {
+            shader.shade(i, pass.first_round, pass.rounds, layout_.points[i], nullptr, r.value,
+                         variance, pass.counts, own);
+        }
+    } catch (const LightingCancelled&) {
+        return;  // keep_going: the bake is being cancelled
+    }
+    r.stream_variance = luminance(Vec3(variance[0], variance[1], variance[2]));
+    r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
+    out.push_back(r);
+    if (progress_ && (shaded_.fetch_add(pass.samples, std::memory_order_relaxed) % 64) <
+                         std::size_t(pass.samples))
+        report_progress();
+}
+
+// A tile's points join their running means. Their variance: the
+// independent-draw formula (stable per point, but too high for correlated
+// draws) scaled by the tile's ratio of the streams' honest estimate to it
+// (many degrees of freedom once pooled over the tile), or the point's own
+// streams' estimate where that is larger.
+void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
+    double sum_stream = 0, sum_own = 0;
+    for (const Shaded& r : tile) {
+        sum_stream += r.stream_variance;
+        sum_own += r.own_variance;
+    }
+    const bool pooled = sum_own > 0;
+    const double ratio = pooled ? sum_stream / sum_own : 1.0;
+    for (const Shaded& r : tile) {
+        PointState& s = state_[r.i];
+        ++s.passes;
+        s.weight += pass.samples;
+        const double weight = double(pass.samples) / s.weight;
+        float* mean = &result_.value[3 * r.i];
+        for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
+            if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
+        // The larger of the two: a tile's ratio comes mostly from its smooth
+        // texels, and would understate a texel whose own streams disagree
+        // more (rare bright samples, a shadow edge).
+        const double variance =
+            pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
+        s.variance_sum += double(pass.samples) * pass.samples * variance;
+        // A point whose samples all agreed (nothing seen yet, typically a
+        // shadowed texel that rare samples light) gives no error estimate:
+        // it is not done, but keeps sampling while others still need to.
+        if (settings_.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
+            s.variance_sum > 0 && relative_error(s, mean) <= settings_.noise_target)
+            s.done = true;
+    }
+}
+
+void Baker::run_pass(const Pass& pass) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout_.tiles, 1),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+        PointLighting& shader = shaders_.local();
+        std::vector<Shaded> shaded_tile;
+        for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
+            if (cancel_.load(std::memory_order_relaxed)) return;
+            shaded_tile.clear();
+            layout_.tile_points(tile,
+                                [&](std::size_t i) { shade_point(shader, i, pass, shaded_tile); });
+            accumulate(pass, shaded_tile);
+        }
+    });
+}
+
+// The next pass of the schedule, cut to what the time budget still fits (as
+// the passes so far predict its duration); false when the bake ends here.
+bool Baker::plan_pass(Pass& pass) {
+    if (time_ends_) {
+        status_ = BakeStatus::TimeBudget;
+        return false;
+    }
+    pass.first_round = done_rounds_;
+    if (done_rounds_ < budget_.full_rounds) {
+        pass.rounds = std::min(next_rounds_, budget_.full_rounds - done_rounds_);
+    } else if (!last_done_) {
+        pass.rounds = 1;
+        pass.counts = budget_.last.data();
+    } else {
+        return false;
+    }
+    if (settings_.time_budget > 0 && pass_count_ > 0) {
+        const double fits = timer_.fit(settings_.time_budget - elapsed());
+        const double fit_rounds = fits / budget_.per_round;
+        // When the time left would cut the pass after this one short (less
+        // than 3× this pass fits), this pass takes all of it and is the last:
+        // a small final pass adds few samples, and as its estimate joins the
+        // others' as an independent one, its poor error raises the estimate.
+        if (!pass.counts && fit_rounds < 3.0 * pass.rounds &&
+            fit_rounds < budget_.full_rounds - done_rounds_) {
+            pass.rounds = int(std::max(0.0, fit_rounds));
+            time_ends_ = true;
+        }
+        if (pass.rounds < 1 || (pass.counts && fits < budget_.last_samples)) {
+            status_ = BakeStatus::TimeBudget;
+            return false;
+        }
+    }
+    pass.samples = pass.counts ? std::uint32_t(budget_.last_samples)
+                               : std::uint32_t(pass.rounds * budget_.per_round);
+    return true;
+}
+
+bool Baker::noise_target_met() const {
+    return settings_.noise_target > 0 &&
+           std::all_of(state_.begin(), state_.end(), [&](const PointState& s) {
+               return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance_sum == 0);
+           });
+}
+
+void Baker::run_passes() {
+    const double sampling_start = elapsed();
+    for (;;) {
+        Pass pass;
+        if (!plan_pass(pass)) return;
+        const double pass_start = elapsed();
+        run_pass(pass);
+        timer_.add(pass.samples, elapsed() - pass_start);
+        ++pass_count_;
+        if (cancel_) {
+            status_ = BakeStatus::Cancelled;
+            return;
+        }
+        record_pass(sampling_start);
+        if (pass.counts) last_done_ = true;
+        done_rounds_ += pass.rounds;
+        // Doubling keeps the per-pass cost small; under a noise target passes
+        // grow by half only, so a texel overshoots its target by at most
+        // √1.5 ≈ 1.22 in error.
+        const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
+        next_rounds_ = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
+        if (noise_target_met()) {
+            status_ = BakeStatus::NoiseTarget;
+            return;
+        }
+    }
+}
+
+// The bake's convergence after a pass (convergence.h): what the running means
+// have reached, and when.
+void Baker::record_pass(double sampling_start) {
+    const double seconds = elapsed() - sampling_start;
+    double sum_error = 0, sum_samples = 0;
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) continue;
+        sum_error += relative_error(state_[i], &result_.value[3 * i]);
+        sum_samples += state_[i].weight;
+        ++covered;
+    }
+    BakePassRecord r;
+    r.seconds = seconds;
+    r.samples_per_texel = covered ? sum_samples / double(covered) : 0;
+    r.mean_relative_error = covered ? sum_error / double(covered) : 0;
+    result_.stats.convergence.push_back(r);
+}
+
+// The running means are the values; the noise, mask and sample counts join them.
+void Baker::write_outputs() {
+    const std::size_t count = layout_.count;
+    result_.noise.assign(count, 0.f);
+    result_.mask.assign(count, 0.f);
+    result_.samples.assign(count, 0);
+    BakeStats& stats = result_.stats;
+    double sum_error = 0, sum_passes = 0;
+    std::size_t n_covered = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        result_.samples[i] = state_[i].weight;
+        if (!layout_.covered(i)) continue;
+        const PointState& s = state_[i];
+        const double err = relative_error(s, &result_.value[3 * i]);
+        result_.noise[i] = float(err);
+        result_.mask[i] = 1.f;
+        sum_error += err;
+        sum_passes += s.passes;
+        stats.max_relative_error = std::max(stats.max_relative_error, err);
+        ++n_covered;
+    }
+    stats.covered = n_covered;
+    stats.mean_relative_error = n_covered ? sum_error / n_covered : 0;
+    stats.passes_per_texel = n_covered ? sum_passes / n_covered : 0;
+}
+
+// The margin around UV islands: copies of the texels it extends.
+void Baker::fill_margin() {
+    if (!layout_.lightmap() || settings_.margin <= 0) return;
+    const UvCoverage& coverage = layout_.coverage;
+    const std::vector<std::int64_t> source =
+        settings_.margin_type == MarginType::AdjacentFaces
+            ? adjacent_margin_sources(coverage, mesh_, settings_.margin)
+            : margin_sources(coverage, settings_.margin);
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (coverage.is_covered(i) || source[i] < 0) continue;
+        for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = result_.value[3 * source[i] + c];
+        result_.noise[i] = result_.noise[source[i]];
+    }
+}
+
+void Baker::fill_stats() {
+    BakeStats& stats = result_.stats;
+    for (const PointLighting& s : shaders_) {
+        stats.samples += s.counters.samples;
+        stats.rays_traced += s.counters.rays;
+        stats.mis_systems += s.counters.systems;
+    }
+    stats.status = status_;
+    stats.passes = pass_count_;
+    stats.texels = layout_.count;
+    stats.degenerate_uv_triangles = layout_.coverage.degenerate_uv_triangles;
+    stats.overlapping_texels = layout_.coverage.overlapping_texels;
+    stats.samples_per_texel = stats.covered ? double(stats.samples) / stats.covered : 0;
+    stats.plan = context_.plan.to_string();
+    for (std::size_t k = 0; k < settings_.lighting.techniques.size(); ++k) {
+        stats.techniques.push_back(settings_.lighting.techniques[k].name());
+        stats.samples_per_round.push_back(settings_.lighting.samples[k]);
+    }
+    stats.halving = predict_halving(stats.convergence);
+    stats.seconds = elapsed();
+}
+
+BakeResult Baker::run() {
+    run_passes();
+    write_outputs();
+    fill_margin();
+    fill_stats();
+    return std::move(result_);
+}
+
 }  // namespace
 
 const char* bake_status_name(BakeStatus status) {
@@ -204,307 +637,11 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
         return corners_to_vertices(scene.geometry().mesh(in.mesh), bake(scene, corners, progress));
     }
     const auto start = Clock::now();
-    if (!scene.committed())
-        throw std::logic_error("scene: not committed (call commit before baking)");
-    if (in.mesh >= scene.geometry().num_meshes())
-        throw std::invalid_argument("mesh: id " + std::to_string(in.mesh) + " is out of range (" +
-                                    std::to_string(scene.geometry().num_meshes()) + " meshes)");
-    if (in.margin < 0) throw std::invalid_argument("margin: must not be negative");
-    if (in.time_budget < 0 || !std::isfinite(in.time_budget))
-        throw std::invalid_argument("time_budget: must be a non-negative number of seconds");
-    if (in.noise_target < 0 || !std::isfinite(in.noise_target))
-        throw std::invalid_argument("noise_target: must be a non-negative relative error");
-    if (in.rounds_per_pass < 1) throw std::invalid_argument("rounds_per_pass: must be ≥ 1");
-    const Mesh& mesh = scene.geometry().mesh(in.mesh);
-
+    validate(scene, in);
     BakeSettings settings = in;
     if (settings.lighting.techniques.empty())
         default_techniques(scene, settings.lighting.techniques, settings.lighting.samples);
-
-    // Where to shade.
-    BakeResult result;
-    UvCoverage coverage;
-    std::vector<SurfacePoint> points;  // vertex bakes only
-    if (settings.target == BakeTarget::Lightmap) {
-        coverage = rasterize_uv(mesh, settings.width, settings.height);
-        result.width = settings.width;
-        result.height = settings.height;
-    } else {
-        points = corner_points(mesh, settings.smooth_normals);
-        result.width = int(points.size());
-        result.height = 1;
-    }
-    const std::size_t count = settings.target == BakeTarget::Lightmap
-                                  ? coverage.triangle.size()
-                                  : points.size();
-    auto covered = [&](std::size_t i) {
-        return settings.target != BakeTarget::Lightmap || coverage.is_covered(i);
-    };
-
-    // Passes: all rounds at once unless a time or noise budget wants to look
-    // between passes; then passes double in size (rounds_per_pass, twice that,
-    // ...), so budgets are checked often early on and the per-pass cost (one
-    // solve per point) stays small later. Every pass reaches every point: a
-    // time budget ends on whole passes (the first always completes; the last
-    // shrinks to what the measured cost says fits), so all points end with the
-    // same count. Each point's draws continue one low-discrepancy sequence
-    // across passes.
-    const bool progressive = settings.time_budget > 0 || settings.noise_target > 0;
-    settings.lighting.receiver = scene.mesh_receiver(in.mesh);  // render/receiver.h
-    LightingContext context(scene, settings.lighting);
-    const SampleBudget budget = plan_samples(context, settings.samples, settings.lighting.rounds);
-    const long long samples_per_point =
-        (long long)budget.full_rounds * budget.per_round + budget.last_samples;
-
-    std::vector<PointState> state(count);
-    result.value.assign(count * 3, 0.f);  // the running means
-    tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
-    std::atomic<bool> cancel{false};
-    std::mutex report;
-    const int tiles_x = settings.target == BakeTarget::Lightmap
-                            ? (result.width + kTile - 1) / kTile
-                            : int((count + kTile * kTile - 1) / (kTile * kTile));
-    const int tiles_y = settings.target == BakeTarget::Lightmap ? (result.height + kTile - 1) / kTile
-                                                                : 1;
-    const std::size_t tiles = std::size_t(tiles_x) * tiles_y;
-    auto tile_points = [&](std::size_t tile, auto&& visit) {
-        if (settings.target != BakeTarget::Lightmap) {
-            const std::size_t begin = tile * kTile * kTile;
-            for (std::size_t i = begin; i < std::min(count, begin + kTile * kTile); ++i) visit(i);
-            return;
-        }
-        const int tx = int(tile % tiles_x), ty = int(tile / tiles_x);
-        for (int y = ty * kTile; y < std::min(result.height, (ty + 1) * kTile); ++y)
-            for (int x = tx * kTile; x < std::min(result.width, (tx + 1) * kTile); ++x)
-                visit(std::size_t(y) * result.width + x);
-    };
-    auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
-
-    // Uncovered texels are never shaded: they count as done for the noise target.
-    for (std::size_t i = 0; i < count; ++i)
-        if (!covered(i)) state[i].done = true;
-
-    // Progress counts shaded samples; cancel is checked at every point so a
-    // request stops the bake within one point's work.
-    std::size_t to_shade = 0;
-    for (std::size_t i = 0; i < count; ++i) to_shade += covered(i);
-    const double total_work = double(std::max<std::size_t>(1, to_shade)) *
-                              double(std::max<long long>(1, samples_per_point));
-    std::atomic<std::size_t> shaded{0};
-    auto report_progress = [&] {
-        double fraction = double(shaded.load(std::memory_order_relaxed)) / total_work;
-        if (settings.time_budget > 0) fraction = std::max(fraction, elapsed() / settings.time_budget);
-        std::unique_lock<std::mutex> lock(report, std::try_to_lock);
-        if (lock.owns_lock() && !progress(std::min(1.0, fraction))) cancel = true;
-    };
-
-    // Inside a point with huge counts: the cancel check, and progress at most
-    // every 50 ms (time budgets end on whole passes, never inside a point).
-    std::atomic<double> last_report{0};
-    context.keep_going = [&] {
-        const double now = elapsed();
-        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
-            last_report = now;
-            report_progress();
-        }
-        return !cancel.load(std::memory_order_relaxed);
-    };
-
-    // One pass over every point that is not done.
-    struct Pass {
-        int first_round = 0, rounds = 0;
-        const int* counts = nullptr;  // null: the settings' counts
-        std::uint32_t samples = 0;    // per point
-    };
-    // A point's estimate of one pass, before it joins the running mean.
-    struct Shaded {
-        std::size_t i;
-        double value[3];
-        double stream_variance, own_variance;  // luminance
-    };
-    auto shade_point = [&](PointLighting& shader, std::size_t i, const Pass& pass,
-                           std::vector<Shaded>& out) {
-        if (!covered(i) || state[i].done || cancel.load(std::memory_order_relaxed)) return;
-        Shaded r{i, {}, 0, 0};
-        double variance[3], own[3];
-        try {
-            if (settings.target == BakeTarget::Lightmap) {
-                const TexelFootprint footprint(mesh, coverage, i, settings.smooth_normals);
-                shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint,
-                             r.value, variance, pass.counts, own);
-            } else {
-                shader.shade(i, pass.first_round, pass.rounds, points[i], nullptr, r.value,
-                             variance, pass.counts, own);
-            }
-        } catch (const LightingCancelled&) {
-            return;  // context.keep_going: the bake is being cancelled
-        }
-        r.stream_variance = luminance(Vec3(variance[0], variance[1], variance[2]));
-        r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
-        out.push_back(r);
-        if (progress && (shaded.fetch_add(pass.samples, std::memory_order_relaxed) % 64) <
-                            std::size_t(pass.samples))
-            report_progress();
-    };
-    // A tile's points join their running means. Their variance: the
-    // independent-draw formula (stable per point, but too high for correlated
-    // draws) scaled by the tile's ratio of the streams' honest estimate to it
-    // (many degrees of freedom once pooled over the tile), or the point's own
-    // streams' estimate where that is larger.
-    auto accumulate = [&](const Pass& pass, const std::vector<Shaded>& tile) {
-        double sum_stream = 0, sum_own = 0;
-        for (const Shaded& r : tile) {
-            sum_stream += r.stream_variance;
-            sum_own += r.own_variance;
-        }
-        const bool pooled = sum_own > 0;
-        const double ratio = pooled ? sum_stream / sum_own : 1.0;
-        for (const Shaded& r : tile) {
-            PointState& s = state[r.i];
-            ++s.passes;
-            s.weight += pass.samples;
-            const double weight = double(pass.samples) / s.weight;
-            float* mean = &result.value[3 * r.i];
-            for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
-                if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
-            // The larger of the two: a tile's ratio comes mostly from its smooth
-            // texels, and would understate a texel whose own streams disagree
-            // more (rare bright samples, a shadow edge).
-            const double variance =
-                pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
-            s.variance_sum += double(pass.samples) * pass.samples * variance;
-            // A point whose samples all agreed (nothing seen yet, typically a
-            // shadowed texel that rare samples light) gives no error estimate:
-            // it is not done, but keeps sampling while others still need to.
-            if (settings.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-                s.variance_sum > 0 && relative_error(s, mean) <= settings.noise_target)
-                s.done = true;
-        }
-    };
-    auto run_pass = [&](const Pass& pass) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tiles, 1),
-                          [&](const tbb::blocked_range<std::size_t>& range) {
-            PointLighting& shader = shaders.local();
-            std::vector<Shaded> shaded_tile;
-            for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
-                if (cancel.load(std::memory_order_relaxed)) return;
-                shaded_tile.clear();
-                tile_points(tile,
-                            [&](std::size_t i) { shade_point(shader, i, pass, shaded_tile); });
-                accumulate(pass, shaded_tile);
-            }
-        });
-    };
-
-    int pass_count = 0, done_rounds = 0;
-    // Under a time budget the first pass — the part a budget cannot cut — is
-    // a single round, so small budgets are not eaten by it.
-    // (Optimal strategies solve per pass, and a one-round solve is poor:
-    // they keep rounds_per_pass.)
-    const bool single_first = settings.time_budget > 0 && !is_optimal(settings.lighting.strategy);
-    int next_rounds = !progressive ? budget.full_rounds
-                      : single_first ? 1
-                                     : settings.rounds_per_pass;
-    bool last_done = budget.last.empty();
-    PassTimer timer;
-    BakeStatus status = BakeStatus::Complete;
-    for (;;) {
-        Pass pass;
-        pass.first_round = done_rounds;
-        if (done_rounds < budget.full_rounds) {
-            pass.rounds = std::min(next_rounds, budget.full_rounds - done_rounds);
-        } else if (!last_done) {
-            pass.rounds = 1;
-            pass.counts = budget.last.data();
-        } else {
-            break;
-        }
-        if (settings.time_budget > 0 && pass_count > 0) {
-            const double fits = timer.fit(settings.time_budget - elapsed());
-            if (!pass.counts)
-                pass.rounds = int(std::min<double>(pass.rounds, fits / budget.per_round));
-            if (pass.rounds < 1 || (pass.counts && fits < budget.last_samples)) {
-                status = BakeStatus::TimeBudget;
-                break;
-            }
-        }
-        pass.samples = pass.counts ? std::uint32_t(budget.last_samples)
-                                   : std::uint32_t(pass.rounds * budget.per_round);
-        const double pass_start = elapsed();
-        run_pass(pass);
-        timer.add(pass.samples, elapsed() - pass_start);
-        ++pass_count;
-        if (cancel) {
-            status = BakeStatus::Cancelled;
-            break;
-        }
-        if (pass.counts) last_done = true;
-        done_rounds += pass.rounds;
-        // Doubling keeps the per-pass cost small; under a noise target passes
-        // grow by half only, so a texel overshoots its target by at most
-        // √1.5 ≈ 1.22 in error.
-        const double growth = settings.noise_target > 0 ? 1.5 : 2.0;
-        next_rounds = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
-        if (settings.noise_target > 0 &&
-            std::all_of(state.begin(), state.end(), [&](const PointState& s) {
-                return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance_sum == 0);
-            })) {
-            status = BakeStatus::NoiseTarget;
-            break;
-        }
-    }
-    // Outputs, then the margin around UV islands.
-    result.noise.assign(count, 0.f);
-    result.mask.assign(count, 0.f);
-    result.samples.assign(count, 0);
-    for (std::size_t i = 0; i < count; ++i) result.samples[i] = state[i].weight;
-    BakeStats& stats = result.stats;
-    double sum_error = 0, sum_passes = 0;
-    std::size_t n_covered = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-        if (!covered(i)) continue;
-        const PointState& s = state[i];
-        const double err = relative_error(s, &result.value[3 * i]);
-        result.noise[i] = float(err);
-        result.mask[i] = 1.f;
-        sum_error += err;
-        sum_passes += s.passes;
-        stats.max_relative_error = std::max(stats.max_relative_error, err);
-        ++n_covered;
-    }
-    if (settings.target == BakeTarget::Lightmap && settings.margin > 0) {
-        const std::vector<std::int64_t> source =
-            settings.margin_type == MarginType::AdjacentFaces
-                ? adjacent_margin_sources(coverage, mesh, settings.margin)
-                : margin_sources(coverage, settings.margin);
-        for (std::size_t i = 0; i < count; ++i) {
-            if (coverage.is_covered(i) || source[i] < 0) continue;
-            for (int c = 0; c < 3; ++c) result.value[3 * i + c] = result.value[3 * source[i] + c];
-            result.noise[i] = result.noise[source[i]];
-        }
-    }
-
-    for (const PointLighting& s : shaders) {
-        stats.samples += s.counters.samples;
-        stats.rays_traced += s.counters.rays;
-        stats.mis_systems += s.counters.systems;
-    }
-    stats.status = status;
-    stats.passes = pass_count;
-    stats.texels = count;
-    stats.covered = n_covered;
-    stats.degenerate_uv_triangles = coverage.degenerate_uv_triangles;
-    stats.overlapping_texels = coverage.overlapping_texels;
-    stats.mean_relative_error = n_covered ? sum_error / n_covered : 0;
-    stats.samples_per_texel = n_covered ? double(stats.samples) / n_covered : 0;
-    stats.passes_per_texel = n_covered ? sum_passes / n_covered : 0;
-    stats.plan = context.plan.to_string();
-    for (std::size_t k = 0; k < settings.lighting.techniques.size(); ++k) {
-        stats.techniques.push_back(settings.lighting.techniques[k].name());
-        stats.samples_per_round.push_back(settings.lighting.samples[k]);
-    }
-    stats.seconds = elapsed();
-    return result;
+    return Baker(scene, settings, progress, start).run();
 }
 
 }  // namespace omis

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "bake/convergence.h"
 #include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
 
@@ -53,6 +54,10 @@ struct BakeStats {
     std::string plan;                  // EffectPlan::to_string()
     std::vector<std::string> techniques;
     std::vector<int> samples_per_round;
+    // After each completed pass: samples, sampling time and mean relative
+    // error so far; and from them what halving that error would cost.
+    std::vector<BakePassRecord> convergence;
+    HalvingPrediction halving;
 };
 
 struct BakeResult {

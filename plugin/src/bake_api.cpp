@@ -275,6 +275,62 @@ OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats
     });
 }
 
+namespace {
+
+void to_c(const omis::HalvingPrediction& p, OMISBakeHalving& out) {
+    out.seconds = p.seconds;
+    out.beta = p.beta;
+    out.passesFitted = p.passes_fitted;
+}
+
+}  // namespace
+
+OMIS_API int omisGetBakeResultConvergence(OMISBakeResult result, OMISBakePass* passes,
+                                          int capacity) {
+    return guarded(-1, [&] {
+        const auto& history = checked(result, "result")->result.stats.convergence;
+        if (capacity < 0) throw std::invalid_argument("capacity: must not be negative");
+        const int n = int(history.size());
+        if (capacity > 0) checked(passes, "passes");
+        for (int i = 0; i < std::min(n, capacity); ++i) {
+            passes[i].samplesPerTexel = history[i].samples_per_texel;
+            passes[i].seconds = history[i].seconds;
+            passes[i].meanRelativeError = history[i].mean_relative_error;
+        }
+        return n;
+    });
+}
+
+OMIS_API bool omisGetBakeResultHalving(OMISBakeResult result, OMISBakeHalving* halving) {
+    return guarded(false, [&] {
+        const auto& prediction = checked(result, "result")->result.stats.halving;
+        to_c(prediction, *checked(halving, "halving"));
+        return true;
+    });
+}
+
+OMIS_API bool omisPredictBakeHalving(const OMISBakePass* passes, int numPasses,
+                                     OMISBakeHalving* halving) {
+    return guarded(false, [&] {
+        OMISBakeHalving& out = *checked(halving, "halving");
+        if (numPasses < 0) throw std::invalid_argument("numPasses: must not be negative");
+        if (numPasses > 0) checked(passes, "passes");
+        std::vector<omis::BakePassRecord> history(static_cast<std::size_t>(numPasses));
+        for (int i = 0; i < numPasses; ++i) {
+            const OMISBakePass& p = passes[i];
+            if (!std::isfinite(p.seconds) || p.seconds < 0)
+                throw std::invalid_argument("passes: entry " + std::to_string(i) +
+                                            " has seconds that are negative or not finite");
+            if (!std::isfinite(p.meanRelativeError) || p.meanRelativeError < 0)
+                throw std::invalid_argument("passes: entry " + std::to_string(i) +
+                                            " has an error that is negative or not finite");
+            history[i] = {p.samplesPerTexel, p.seconds, p.meanRelativeError};
+        }
+        to_c(omis::predict_halving(history), out);
+        return true;
+    });
+}
+
 OMIS_API size_t omisGetBakeResultPlan(OMISBakeResult result, char* buffer, size_t size) {
     return guarded<size_t>(0, [&] {
         return copy_text(checked(result, "result")->result.stats.plan, buffer, size);

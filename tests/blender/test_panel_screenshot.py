@@ -1,6 +1,7 @@
 """Issue 12 items 5 and 6, with Blender's interface (virtual X server): the panel as
-Blender draws it under Cycles and under EEVEE, screenshots of it, and a bake started
-from it showing its progress and time left in the panel's header.
+Blender draws it under Cycles and under EEVEE — one Render Properties panel of its
+own under both, not inside Cycles' Bake panel —, screenshots of it, and a bake
+started from it showing its progress and time left in the panel's header.
 
 For each engine: Blender itself must call the panel's draw, the Bake operator must be
 reachable from the Properties editor, and a screenshot with the panel must differ
@@ -61,23 +62,6 @@ def properties_area():
     return window, area, region
 
 
-def open_cycles_bake_panel():
-    """Cycles' Bake panel is closed by default and Python cannot open a panel in 3.4:
-    register it (and its subpanels) again without DEFAULT_CLOSED."""
-    parent = bpy.types.CYCLES_RENDER_PT_bake
-    children = [getattr(bpy.types, name) for name in dir(bpy.types)
-                if getattr(getattr(bpy.types, name), "bl_parent_id", "") in
-                ("CYCLES_RENDER_PT_bake", "CYCLES_RENDER_PT_bake_output")]
-    children.sort(key=lambda c: c.bl_parent_id == "CYCLES_RENDER_PT_bake")  # deepest first
-    for cls in children:
-        bpy.utils.unregister_class(cls)
-    bpy.utils.unregister_class(parent)
-    parent.bl_options = set(parent.bl_options) - {'DEFAULT_CLOSED'}
-    bpy.utils.register_class(parent)
-    for cls in reversed(children):
-        bpy.utils.register_class(cls)
-
-
 def screenshot(name):
     window, area, region = properties_area()
     path = os.path.join(OUT, name + ".png")
@@ -101,9 +85,9 @@ class Steps:
         self.headers = []
         original_draw, original_text = ui.draw_omis, operators.progress_text
 
-        def counting_draw(layout, context, with_output):
+        def counting_draw(layout, context):
             self.draws += 1
-            return original_draw(layout, context, with_output)
+            return original_draw(layout, context)
 
         def recording_text(job):
             text = original_text(job)
@@ -120,7 +104,7 @@ class Steps:
         operators.progress_text = recording_text
         ui._draw_header = counting_header
         self.plan = list(self.engine_steps('CYCLES', bpy.types.OMIS_PT_bake)) + \
-            list(self.engine_steps('BLENDER_EEVEE', bpy.types.OMIS_PT_bake_engines)) + \
+            list(self.engine_steps('BLENDER_EEVEE', bpy.types.OMIS_PT_bake)) + \
             list(self.bake_steps())
 
     def redraw(self):
@@ -211,6 +195,5 @@ os.makedirs(OUT, exist_ok=True)
 for value in ('PRESS', 'RELEASE'):
     bpy.context.window_manager.windows[0].event_simulate(type='ESC', value=value)
 build_scene()
-open_cycles_bake_panel()
 properties_area()
 bpy.app.timers.register(Steps(), first_interval=1.0)

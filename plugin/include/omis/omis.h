@@ -353,6 +353,36 @@ typedef struct OMISBakeStats {
     uint64_t degenerateUvTriangles;
 } OMISBakeStats;
 OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats);
+
+/* The bake's convergence: one record per completed pass. Passes are taken when
+ * a time or noise budget is set ("timeBudget", "noiseTarget"); a bake with a
+ * sample budget alone runs one pass. */
+typedef struct OMISBakePass {
+    double samplesPerTexel;   /* mean over baked texels, so far */
+    double seconds;           /* sampling time from the first pass's start */
+    double meanRelativeError; /* the running estimate's, mean over baked texels
+                                 (vertex bakes: over corners) */
+} OMISBakePass;
+/* Writes at most capacity records (passes may be NULL when capacity is 0);
+ * returns how many the result holds, or -1 on error. */
+OMIS_API int omisGetBakeResultConvergence(OMISBakeResult result, OMISBakePass* passes,
+                                          int capacity);
+/* What halving the mean error would cost, from error ∝ t^(-beta) fitted (least
+ * squares in log-log) over the last passes (at most 4; the first only when
+ * there are 2), t the sampling time: seconds = t·(2^(1/beta) − 1) more. With a
+ * single pass, passes too close (< 1.25× apart in time or < 1.5× in samples) or
+ * an error that does not fall, beta = 0.5 is assumed — independent draws, which
+ * omis' low-discrepancy draws converge at least as fast as: then seconds is an
+ * upper bound and passesFitted is 0. A fitted beta is kept within [0.25, 1.5]. */
+typedef struct OMISBakeHalving {
+    double seconds;   /* more sampling time to halve the mean relative error */
+    double beta;      /* the convergence exponent used */
+    int passesFitted; /* passes behind beta; >= 2: measured, 0: assumed */
+} OMISBakeHalving;
+OMIS_API bool omisGetBakeResultHalving(OMISBakeResult result, OMISBakeHalving* halving);
+/* The same prediction from a history of numPasses records (in pass order). */
+OMIS_API bool omisPredictBakeHalving(const OMISBakePass* passes, int numPasses,
+                                     OMISBakeHalving* halving);
 /* The effect plan and technique choice of the bake as text; returns the full
  * length without the NUL and writes at most bufferSize bytes (as
  * omisGetEffectPlan). */
