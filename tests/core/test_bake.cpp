@@ -264,9 +264,13 @@ TEST_CASE("budgets: time and noise", "[bake]") {
         s.time_budget = 0.3;
         const BakeResult r = bake(scene, s);
         CHECK(r.stats.status == BakeStatus::TimeBudget);
-        // Loose: the machine may be shared; the benchmark measures precisely.
-        CHECK(r.stats.seconds <= 0.45);
         CHECK(r.stats.passes >= 1);
+        // No wall-clock bound (the machine may be shared; bench/ measures
+        // time): the bake's own records show that every pass after the first
+        // began before the budget ran out.
+        const auto& passes = r.stats.convergence;
+        REQUIRE(passes.size() == std::size_t(r.stats.passes));
+        for (std::size_t i = 1; i < passes.size(); ++i) CHECK(passes[i - 1].seconds < 0.3);
         const std::uint32_t first = r.samples[0];
         CHECK(first >= 8u);  // at least the first pass (one round of 8)
         for (std::size_t i = 0; i < r.samples.size(); ++i) CHECK(r.samples[i] == first);
