@@ -49,7 +49,7 @@ constexpr double kProgressiveSamplesPerCoefficient = 8;
 // S − k − 1 degrees of freedom; below 2(k + 1) samples it has fewer degrees of
 // freedom than coefficients and keeps α on lucky draws (issue 10: all ten
 // techniques at one sample each lost to balance by 25 %).
-constexpr double kDirectSamplesPerCoefficient = 0;
+constexpr double kDirectSamplesPerCoefficient = 2;
 
 MomentKernel select_moment_kernel(int N, int C) {
     if (C == 3) {
