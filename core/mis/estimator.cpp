@@ -140,20 +140,42 @@ void MisEstimator::reset() {
     clear(in_round_, N_);
     clear(sums_, 2 * N_ * C_ + N_ + moments_size());
     snapshots_.clear();  // keeps its capacity: no allocation per point
+    std::fill(stream_sums_.begin(), stream_sums_.end(), 0.0);
+    stream_ = 0;
     negative_f_.fill(false);
 }
 
-void MisEstimator::add_rounds(const MisEstimator& other) {
-    if (strategy_ == Strategy::OptimalProgressive || other.strategy_ != strategy_ ||
-        other.N_ != N_ || other.C_ != C_ || other.counts_ != counts_)
-        throw std::logic_error("add_rounds: estimators differ (or are optimal-progressive)");
-    if (round_left_ != samples_per_round_ || other.round_left_ != other.samples_per_round_)
-        throw std::logic_error("add_rounds: a round is incomplete");
-    rounds_ += other.rounds_;
-    double* to = sums_.data();
-    const double* from = other.sums_.data();
-    for (std::size_t i = 0, n = sums_.size(); i < n; ++i) to[i] += from[i];
-    for (int c = 0; c < C_; ++c) negative_f_[c] = negative_f_[c] || other.negative_f_[c];
+void MisEstimator::set_streams(int count) {
+    if (count < 0) throw std::invalid_argument("streams: must not be negative");
+    if (count > 0 && strategy_ == Strategy::OptimalProgressive)
+        throw std::logic_error("streams: optimal-progressive needs an estimator per stream");
+    streams_ = count;
+    stream_ = 0;
+    stream_sums_.assign(std::size_t(count) * stream_stride(), 0.0);
+}
+
+void MisEstimator::set_stream(int s) {
+    if (s < 0 || s >= streams_) throw std::invalid_argument("stream: out of range");
+    if (round_left_ != samples_per_round_)
+        throw std::logic_error("stream: changed inside a round");
+    stream_ = s;
+}
+
+int MisEstimator::stream_rounds(int s) const {
+    return s >= 0 && s < streams_ ? int(stream_sums_[s * stream_stride() + C_ + N_]) : 0;
+}
+
+void MisEstimator::stream_estimates(int s, const double* beta, double* balance,
+                                    double* corrected) const {
+    const double* sums = &stream_sums_[s * stream_stride()];
+    const double R = sums[C_ + N_];
+    for (int c = 0; c < C_; ++c) balance[c] = sums[c] / R;
+    if (!corrected) return;
+    for (int c = 0; c < C_; ++c) corrected[c] = balance[c];
+    for (int k = 0; k < N_; ++k) {
+        const double unseen = 1.0 - sums[C_ + k] / R;  // ĉ_k estimates 1
+        for (int c = 0; c < C_; ++c) corrected[c] += beta[k * C_ + c] * unseen;
+    }
 }
 
 double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
@@ -250,6 +272,10 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
         double* b = a + N_ * N_;
         double* m = b + N_ * C_;
         moment_kernel_(N_, C_, r, fq, a, m + C_, b, m);
+        if (streams_ > 0) {
+            double* stream_c = &stream_sums_[stream_ * stream_stride() + C_];
+            for (int k = 0; k < N_; ++k) stream_c[k] += r[k];
+        }
     }
 
     // Y = w_t f / (n_t p_t) = (f/q) · w_t / share_t with share_t = n_t p_t / q
@@ -266,6 +292,7 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
         const double y = fq[c] * ratio;
         sum_y()[t * C_ + c] += y;
         sum_y2()[t * C_ + c] += y * y;
+        if (streams_ > 0) stream_sums_[stream_ * stream_stride() + c] += y;
     }
     ++seen()[t];
 
@@ -302,6 +329,7 @@ void MisEstimator::add_samples(size_t count, const int* technique,
 
 void MisEstimator::finish_round() {
     ++rounds_;
+    if (streams_ > 0) stream_sums_[stream_ * stream_stride() + C_ + N_] += 1;
     std::fill(in_round_.begin(), in_round_.end(), 0);
     round_left_ = samples_per_round_;
     if (strategy_ != Strategy::OptimalProgressive) return;
@@ -405,14 +433,6 @@ void MisEstimator::balance_estimates(double* out) const {
     for (int c = 0; c < C_; ++c) out[c] /= rounds_;
 }
 
-void MisEstimator::corrected_estimates(const double* beta, double* out) const {
-    const double R = rounds_;
-    balance_estimates(out);
-    for (int k = 0; k < N_; ++k) {
-        const double unseen = 1.0 - c()[k] / R;  // ĉ_k estimates 1
-        for (int c = 0; c < C_; ++c) out[c] += beta[k * C_ + c] * unseen;
-    }
-}
 
 double MisEstimator::balance_estimate(int c) const {
     double balance = 0;
@@ -451,6 +471,39 @@ MisResult MisEstimator::result() const {
     return out;
 }
 
+void MisEstimator::direct_estimate(MisResult& out) const {
+    Moments mo;
+    normalized_moments(mo);
+    const double R = rounds_;
+    const SolveResult solved =
+        solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(), counts_.data(),
+                            R * samples_per_round_, kDirectSamplesPerCoefficient);
+    out.rank = solved.rank;
+    // Kept α: the unbiased residual variance of the fit times the cost of
+    // estimating α (solver.h, rule 3); otherwise the estimate is the balance
+    // heuristic's, and so is its variance.
+    const double S = R * samples_per_round_, k = solved.free_coefficients;
+    const double inflation = S / (S - k - 1) * (S - 2) / (S - k - 2);
+    double* beta = out.alpha.data();  // α less its n-component
+    for (int c = 0; c < C_; ++c) {
+        const double balance = balance_estimate(c), balance_variance = heuristic_variance(c);
+        out.estimate[c] = balance;
+        out.variance[c] = balance_variance;
+        if (!solved.kept[c] || !without_n(solved.alpha.data(), c, beta)) continue;
+        double corrected = balance;
+        const double* c_sums = this->c();
+        for (int i = 0; i < N_; ++i) corrected += beta[i * C_ + c] * (1.0 - c_sums[i] / R);
+        if (out_of_range(corrected, c, kDirectFallbackSigmas, balance_variance)) {
+            for (int i = 0; i < N_; ++i) beta[i * C_ + c] = 0;
+            out.fell_back |= 1 << c;
+            continue;
+        }
+        out.estimate[c] = corrected;
+        out.variance[c] = solved.fit_variance[c] * inflation / R;
+        out.fit_inflation = inflation;
+    }
+}
+
 double MisEstimator::heuristic_variance(int c) const {
     // Stratified variance of (1/R) Σ_s Y_s: (1/R²) Σ_t N_t Var_t(Y), with the
     // per-technique sample variance (or E[Y²], an upper bound, from one sample).
@@ -471,7 +524,6 @@ void MisEstimator::result(MisResult& out) const {
                                std::to_string(rounds_) + " complete rounds)");
     if (rounds_ == 0)
         throw std::logic_error("estimate: no complete round of samples was added");
-    const double R = rounds_;
     out.rounds = rounds_;
     out.rank = 0;
     out.fell_back = 0;
@@ -481,38 +533,9 @@ void MisEstimator::result(MisResult& out) const {
     out.fit_inflation = 1;
 
     switch (strategy_) {
-        case Strategy::OptimalDirect: {
-            Moments mo;
-            normalized_moments(mo);
-            const SolveResult solved =
-                solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(),
-                                    counts_.data(), R * samples_per_round_,
-                                    kDirectSamplesPerCoefficient);
-            out.rank = solved.rank;
-            // Kept α: the unbiased residual variance of the fit times the cost of
-            // estimating α (solver.h, rule 3); otherwise the estimate is the
-            // balance heuristic's, and so is its variance.
-            const double S = R * samples_per_round_, k = solved.free_coefficients;
-            const double inflation = S / (S - k - 1) * (S - 2) / (S - k - 2);
-            for (int c = 0; c < C_; ++c) {
-                const double balance = balance_estimate(c), balance_variance = heuristic_variance(c);
-                out.estimate[c] =
-                    solved.kept[c] ? balance + correction(solved.alpha.data(), c, this->c(), R)
-                                   : balance;
-                out.variance[c] =
-                    solved.kept[c] ? solved.fit_variance[c] * inflation / R : balance_variance;
-                if (solved.kept[c] &&
-                    out_of_range(out.estimate[c], c, kDirectFallbackSigmas, balance_variance)) {
-                    out.estimate[c] = balance;
-                    out.variance[c] = balance_variance;
-                    out.fell_back |= 1 << c;
-                } else if (solved.kept[c]) {
-                    without_n(solved.alpha.data(), c, &out.alpha[0]);
-                    out.fit_inflation = inflation;
-                }
-            }
+        case Strategy::OptimalDirect:
+            direct_estimate(out);
             break;
-        }
         case Strategy::OptimalProgressive: {
             progressive_estimate(out);
             for (int c = 0; c < C_; ++c) {

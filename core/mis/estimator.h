@@ -72,21 +72,27 @@ public:
     // Every channel's, into out[C].
     void balance_estimates(double* out) const;
 
-    // Adds the complete rounds of another estimator of the same strategy,
-    // techniques, channels and counts, as if its samples had been added here:
-    // the moments are sums over samples. Lets per-stream estimators make up
-    // the whole without accumulating every sample twice. Not for
-    // optimal-progressive, whose epochs follow the order of the rounds.
-    // Throws std::logic_error when the two do not match or a round is open.
-    void add_rounds(const MisEstimator& other);
+    // Streams (independent randomizations of one point's rounds, issue 7):
+    // with set_streams(K), the samples added while stream s is current also
+    // go to light per-stream sums — Σ Y per channel and, for the optimal
+    // strategies, Σ p_k/q — from which each stream's estimate follows
+    // (stream_estimates), with no estimator per stream. set_streams(0), the
+    // default, keeps none. Both clear the sums; set_stream needs a round
+    // boundary. Not for optimal-progressive, whose per-stream estimate needs
+    // its own cross-fit. Throw std::invalid_argument / std::logic_error.
+    void set_streams(int count);
+    void set_stream(int s);
+    int stream_rounds(int s) const;
+    // Stream s's balance (or heuristic) estimate into balance[C] and, when
+    // corrected is given, that plus Σ_k β_k (1 − ĉ_k) over its own samples
+    // into corrected[C] (β without n-component: MisResult::alpha). No
+    // checks, no allocation.
+    void stream_estimates(int s, const double* beta, double* balance,
+                          double* corrected = nullptr) const;
 
     // The control-variate estimate (SPEC §2) for a given α (N×C, [k*C + c]);
     // any α ∝ n reproduces the balance estimate bit for bit.
     std::vector<double> control_variate_estimate(const std::vector<double>& alpha) const;
-    // Per channel: balance estimate + Σ_k β_k (1 − ĉ_k), for a β without
-    // n-component (MisResult::alpha), into out[C]; no checks, no allocation.
-    // Applies another estimator's α, e.g. the whole's to one of its streams.
-    void corrected_estimates(const double* beta, double* out) const;
 
     int num_techniques() const { return N_; }
     int num_channels() const { return C_; }
@@ -107,6 +113,7 @@ private:
     // Balance estimate plus the control-variate correction for α (N×C).
     double control_variate(const double* alpha, int c) const;
     double heuristic_variance(int c) const;
+    void direct_estimate(MisResult& out) const;  // result() of optimal-direct
     // The per-estimate guard (issue 10): a channel's optimal estimate is out of
     // range when it is negative although no sample had f < 0, or (sigmas > 0)
     // when it lies more than `sigmas` balance standard errors from balance.
@@ -129,8 +136,7 @@ private:
     std::vector<int> in_round_;  // samples of each technique in the open round
     int round_left_ = 0;         // samples still missing from the open round
 
-    // Every sum in one block, so that a reset is one fill and add_rounds one
-    // loop (both run per point and stream). Per technique t, sums of
+    // Every sum in one block, so that a reset (per point) is one fill. Per technique t, sums of
     // Y = w_t f/(n_t p_t) and Y² (heuristics; for the optimal strategies Y is
     // the balance contribution f/q) and its sample count; then, for the
     // optimal strategies, Σ p_i p_j/q² (a), Σ p_i f/q² (b), Σ f²/q² (m),
@@ -157,6 +163,10 @@ private:
     // Progressive: the running moments (a, b, m, c) after rounds 1, 2, 4,
     // 8, ..., one block each: the epoch boundaries of the cross-fit.
     std::vector<double> snapshots_;
+    // Per stream: Σ Y per channel, Σ p_k/q per technique (optimal), rounds.
+    int streams_ = 0, stream_ = 0;
+    std::vector<double> stream_sums_;
+    int stream_stride() const { return C_ + N_ + 1; }
     void progressive_estimate(MisResult& out) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};

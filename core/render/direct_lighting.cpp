@@ -85,20 +85,24 @@ struct PointLighting::Impl {
     // Sum of the estimates (and their own variance estimates, if asked).
     // The estimators' results stay in results_ (main, hidden) until the next call.
     Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
-    // optimal-direct: a stream's estimate with the α of the last estimate_of
-    // (the whole's), and that α's rule-3 inflation of the variance.
-    Vec3 with_whole_alpha(const Estimators& stream) const;
+    // Stream s's estimate from the whole's per-stream sums (streams_in_whole):
+    // its balance (heuristics: own) estimate, or with the α of the last
+    // estimate_of (optimal-direct: the whole's); and that α's rule-3
+    // inflation of the variance.
+    void stream_of(const Estimators& whole, int s, bool with_alpha, Vec3& balance,
+                   Vec3& corrected) const;
     double whole_alpha_inflation() const;
     // The balance heuristic's estimate from the same samples (optimal
     // strategies accumulate it alongside their moments).
     static Vec3 balance_of(const Estimators& e);
-    // Whether samples go to the per-stream estimators only, the whole being
-    // their sum (sum_streams): every strategy but optimal-progressive, whose
-    // epochs follow the order of the rounds across streams.
-    static bool streams_make_the_whole(Strategy strategy, bool by_stream) {
+    // Whether the whole's estimators keep the per-stream sums (MisEstimator::
+    // set_streams) instead of an estimator per stream: every strategy but
+    // optimal-progressive, whose stream estimates need their own cross-fit.
+    static bool streams_in_whole(Strategy strategy, bool by_stream) {
         return by_stream && strategy != Strategy::OptimalProgressive;
     }
-    static void sum_streams(const Estimators& all, const Estimators* per, const int* stream_rounds);
+    static void set_streams(const Estimators& all, int count);
+    static void set_stream(const Estimators& all, int s);
     MisResult results_[2];  // estimate_of's (main, hidden), reused from point to point
     // Optimal strategies: whether the independent streams say the optimal
     // estimate is noisier here than the balance heuristic's.
@@ -542,13 +546,14 @@ Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
     return total;
 }
 
-void PointLighting::Impl::sum_streams(const Estimators& all, const Estimators* per,
-                                      const int* stream_rounds) {
-    for (int s = 0; s < kSampleStreams; ++s) {
-        if (!stream_rounds[s]) continue;
-        all.main->add_rounds(*per[s].main);
-        if (all.hidden) all.hidden->add_rounds(*per[s].hidden);
-    }
+void PointLighting::Impl::set_streams(const Estimators& all, int count) {
+    all.main->set_streams(count);
+    if (all.hidden) all.hidden->set_streams(count);
+}
+
+void PointLighting::Impl::set_stream(const Estimators& all, int s) {
+    all.main->set_stream(s);
+    if (all.hidden) all.hidden->set_stream(s);
 }
 
 // With a low-discrepancy sequence the balance heuristic can converge faster
@@ -599,16 +604,18 @@ Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
 // these over the streams is that of the optimal estimate without α's
 // estimation noise, and in-sample slightly optimistic; rule 3's inflation
 // (whole_alpha_inflation) restores both, as for the estimate's own variance.
-Vec3 PointLighting::Impl::with_whole_alpha(const Estimators& stream) const {
-    Vec3 total;
-    const MisEstimator* estimators[2] = {stream.main, stream.hidden};
+void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool with_alpha,
+                                    Vec3& balance, Vec3& corrected) const {
+    balance = corrected = Vec3();
+    const MisEstimator* estimators[2] = {whole.main, whole.hidden};
     for (int i = 0; i < 2; ++i) {
         if (!estimators[i]) continue;
-        double e[3];
-        estimators[i]->corrected_estimates(results_[i].alpha.data(), e);
-        total += Vec3(e[0], e[1], e[2]);
+        double b[3], e[3];
+        estimators[i]->stream_estimates(s, results_[i].alpha.data(), b,
+                                        with_alpha ? e : nullptr);
+        balance += Vec3(b[0], b[1], b[2]);
+        corrected += with_alpha ? Vec3(e[0], e[1], e[2]) : Vec3(b[0], b[1], b[2]);
     }
-    return total;
 }
 
 double PointLighting::Impl::whole_alpha_inflation() const {
@@ -641,7 +648,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // for the optimal strategies' choice against balance (balance_is_better).
     const bool by_stream =
         streams_used >= 2 && (variance || is_optimal(p_.settings.strategy));
-    const bool merge = streams_make_the_whole(p_.settings.strategy, by_stream);
+    const bool in_whole = streams_in_whole(p_.settings.strategy, by_stream);
 
     // Estimators: one over all rounds, and one per stream for the error.
     const bool fresh = counts_in != nullptr;  // counts differ from the cached ones
@@ -649,7 +656,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     Estimators all{nullptr, nullptr}, per[K] = {};
     const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
     for (int s = -1; s < K && !active.all.empty(); ++s) {
-        if (s >= 0 && (!by_stream || stream_rounds[s] == 0)) continue;
+        if (s >= 0 && (!by_stream || in_whole || stream_rounds[s] == 0)) continue;
         const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
         Estimators& e = s < 0 ? all : per[s];
         if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
@@ -658,6 +665,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
                                   fresh);
     }
+    if (!active.all.empty()) set_streams(all, in_whole ? K : 0);
 
     // Delta lights are evaluated once per round where positions vary or lights
     // are drawn, else once at the centre.
@@ -679,18 +687,18 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             delta_sum[s] += d;
             delta_sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
         }
-        const Estimators into[2] = {merge ? per[s] : all, per[s]};
+        const Estimators into[2] = {all, per[s]};
+        if (in_whole && !active.all.empty()) set_stream(all, s);
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
             const ScrambledSobol seq = sequence(std::size_t(k), s);
             for (int j = 0; j < counts[k]; ++j)
                 take_sample(active, a, seq,
                             round_in_stream * std::uint32_t(p_.settings.samples[k]) + j, centre,
-                            footprint, into, by_stream && !merge ? 2 : 1);
+                            footprint, into, by_stream && !in_whole ? 2 : 1);
         }
     }
 
-    if (merge && !active.all.empty()) sum_streams(all, per, stream_rounds);
     Vec3 own_variance;
     Vec3 total = delta_per_round || p_.delta.empty() ? Vec3() : delta_lighting(centre, 0.0);
     // The whole's estimate, then each stream's: the optimal strategies compare
@@ -709,10 +717,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     if (by_stream && !active.all.empty())
         for (int s = 0; s < K; ++s) {
             if (!stream_rounds[s]) continue;
-            stream_balance[s] = balance_of(per[s]);  // the heuristics' own estimate
-            stream_estimate[s] = direct    ? with_whole_alpha(per[s])
-                                 : optimal ? estimate_of(per[s])
-                                           : stream_balance[s];
+            if (!in_whole) {  // optimal-progressive: its own cross-fit per stream
+                stream_balance[s] = balance_of(per[s]);
+                stream_estimate[s] = estimate_of(per[s]);
+                continue;
+            }
+            // The heuristics' own estimate; optimal-direct's with the whole's α.
+            stream_of(all, s, direct, stream_balance[s], stream_estimate[s]);
         }
     const bool use_balance =
         !active.all.empty() && by_stream && optimal &&

@@ -1,8 +1,9 @@
-// The estimator's pieces for per-stream shading (issue 10, overhead): a whole
-// made up of its streams (add_rounds) equals the whole accumulated sample by
-// sample, and a stream's estimate with the whole's α (corrected_estimates)
-// equals the control-variate estimate for that α. These are identities of
-// sums, so they are checked to rounding (relative 1e-12), not statistically.
+// The estimator's per-stream sums (issue 10, overhead): a stream's estimate
+// from the whole's sums (set_streams, stream_estimates) equals that of an
+// estimator fed the stream's samples alone — balance or heuristic estimate,
+// and the control variate with a given α — and keeping the sums leaves the
+// whole's result unchanged. These are identities of sums, so they are
+// checked to rounding (relative 1e-12), not statistically.
 #include <catch2/catch.hpp>
 
 #include <random>
@@ -33,55 +34,53 @@ void add_rounds_to(std::vector<MisEstimator*> into, int rounds, std::mt19937_64&
 
 }  // namespace
 
-TEST_CASE("mis streams: the sum of streams is the whole", "[mis]") {
+TEST_CASE("mis streams: a stream's sums give the stream's own estimates", "[mis]") {
     for (Strategy s : {Strategy::Balance, Strategy::Power, Strategy::OptimalDirect}) {
-        MisEstimator whole(s, 2, 3, {2, 1}), summed(s, 2, 3, {2, 1});
-        std::vector<MisEstimator> streams(4, MisEstimator(s, 2, 3, {2, 1}));
-        std::mt19937_64 rng(7);
-        for (int k = 0; k < 4; ++k) add_rounds_to({&whole, &streams[k]}, 3 + k, rng);
-        for (const MisEstimator& e : streams) summed.add_rounds(e);
-        const MisResult a = whole.result(), b = summed.result();
         INFO(strategy_name(s));
-        CHECK(a.rounds == b.rounds);
-        for (int c = 0; c < 3; ++c) {
-            CHECK(b.estimate[c] == Approx(a.estimate[c]).epsilon(1e-12));
-            CHECK(b.variance[c] == Approx(a.variance[c]).epsilon(1e-12));
+        MisEstimator whole(s, 2, 3, {2, 1}), plain(s, 2, 3, {2, 1});
+        std::vector<MisEstimator> alone(3, MisEstimator(s, 2, 3, {2, 1}));
+        whole.set_streams(3);
+        std::mt19937_64 rng(7);
+        // Rounds dealt to streams 0, 1, 2, 0, 1, 2, ... as the renderer does.
+        for (int r = 0; r < 12; ++r) {
+            whole.set_stream(r % 3);
+            add_rounds_to({&whole, &plain, &alone[r % 3]}, 1, rng);
+        }
+        const MisResult w = whole.result(), p = plain.result();
+        for (int c = 0; c < 3; ++c) CHECK(w.estimate[c] == p.estimate[c]);
+        const std::vector<double> alpha = {0.3, -0.2, 0.5, 0.1, 0.7, -0.4};
+        for (int k = 0; k < 3; ++k) {
+            CHECK(whole.stream_rounds(k) == 4);
+            double balance[3];
+            whole.stream_estimates(k, nullptr, balance);
+            for (int c = 0; c < 3; ++c)
+                CHECK(balance[c] == Approx(alone[k].balance_estimate(c)).epsilon(1e-12));
+            if (s != Strategy::OptimalDirect) continue;
+            // β without n-component (n = (2, 1)): β·n = 0 per channel.
+            std::vector<double> beta(6);
+            for (int c = 0; c < 3; ++c) {
+                const double t = (2 * alpha[c] + alpha[3 + c]) / 5;
+                beta[c] = alpha[c] - 2 * t;
+                beta[3 + c] = alpha[3 + c] - t;
+            }
+            double again[3], corrected[3];
+            whole.stream_estimates(k, beta.data(), again, corrected);
+            for (int c = 0; c < 3; ++c) CHECK(again[c] == balance[c]);
+            const std::vector<double> reference = alone[k].control_variate_estimate(alpha);
+            for (int c = 0; c < 3; ++c)
+                CHECK(corrected[c] == Approx(reference[c]).epsilon(1e-12));
         }
     }
 }
 
-TEST_CASE("mis streams: a stream with the whole's alpha is the control variate", "[mis]") {
-    MisEstimator whole(Strategy::OptimalDirect, 2, 3, {2, 1});
-    MisEstimator stream(Strategy::OptimalDirect, 2, 3, {2, 1});
-    std::mt19937_64 rng(11);
-    add_rounds_to({&whole}, 40, rng);
-    add_rounds_to({&whole, &stream}, 10, rng);
-    const MisResult r = whole.result();
-    REQUIRE(r.alpha.size() == 6);
-    double corrected[3], balance[3];
-    stream.corrected_estimates(r.alpha.data(), corrected);
-    stream.balance_estimates(balance);
-    const std::vector<double> reference = stream.control_variate_estimate(r.alpha);
-    for (int c = 0; c < 3; ++c) {
-        CHECK(corrected[c] == Approx(reference[c]).epsilon(1e-12));
-        CHECK(balance[c] == Approx(stream.balance_estimate(c)).epsilon(1e-12));
-    }
-    // The whole's own estimate with its α (no fallback here: f is smooth).
-    double own[3];
-    whole.corrected_estimates(r.alpha.data(), own);
-    for (int c = 0; c < 3; ++c) CHECK(own[c] == Approx(r.estimate[c]).epsilon(1e-12));
-}
-
-TEST_CASE("mis streams: add_rounds refuses mismatched or progressive estimators", "[mis]") {
-    MisEstimator a(Strategy::OptimalDirect, 2, 3, {2, 1});
-    const MisEstimator other_counts(Strategy::OptimalDirect, 2, 3, {1, 1});
-    const MisEstimator other_strategy(Strategy::Balance, 2, 3, {2, 1});
-    CHECK_THROWS_AS(a.add_rounds(other_counts), std::logic_error);
-    CHECK_THROWS_AS(a.add_rounds(other_strategy), std::logic_error);
+TEST_CASE("mis streams: bad stream use is refused", "[mis]") {
     MisEstimator p(Strategy::OptimalProgressive, 2, 3, {2, 1});
-    CHECK_THROWS_AS(p.add_rounds(p), std::logic_error);
+    CHECK_THROWS_AS(p.set_streams(4), std::logic_error);
+    MisEstimator e(Strategy::OptimalDirect, 2, 3, {2, 1});
+    CHECK_THROWS_AS(e.set_streams(-1), std::invalid_argument);
+    e.set_streams(2);
+    CHECK_THROWS_AS(e.set_stream(2), std::invalid_argument);
     const double pdfs[2] = {1.0, 1.0}, f[3] = {1, 1, 1};
-    MisEstimator open(Strategy::OptimalDirect, 2, 3, {2, 1});
-    open.add_sample(0, pdfs, f);  // a round left open
-    CHECK_THROWS_AS(a.add_rounds(open), std::logic_error);
+    e.add_sample(0, pdfs, f);  // a round left open
+    CHECK_THROWS_AS(e.set_stream(1), std::logic_error);
 }
