@@ -1,12 +1,14 @@
 // The hard-case suite of issue 10 (tests/hard_cases): per case and sample
 // count, the MSE of optimal-direct and optimal-progressive relative to the
 // balance heuristic, negative and zero texel counts, and bias/σ.
-//   omis_bench_hard_cases [copies] [reference rounds]
+//   omis_bench_hard_cases [copies] [reference rounds] [case name part] [spp,...]
 //   omis_bench_hard_cases --cost STRATEGY SPP TEXELS   (see cost_run)
+//   omis_bench_hard_cases --allocation COPIES          (see allocation_sweep)
 // Errors are against a balance reference of `reference rounds` rounds over 16
 // copies; bias/σ is the rms over points of (mean error)/(σ of one balance
 // estimate at that spp), whose noise floor for an unbiased strategy is about
 // 1/√copies.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -51,13 +53,70 @@ int cost_run(const char* strategy_name_arg, int spp, int texels) {
     return 0;
 }
 
+// --allocation: the most any fixed allocation could gain over equal counts
+// (issue 10, item 2), at equal samples: per three-technique case,
+// optimal-direct's MSE with every count vector of 4 samples per round
+// (12 rounds) relative to 1 sample each (16 rounds), both 48 samples a point.
+int allocation_sweep(int copies) {
+    const std::vector<std::vector<int>> allocations = {
+        {1, 1, 1}, {2, 1, 1}, {1, 2, 1}, {1, 1, 2}};
+    std::printf("equal samples (48 per point): optimal-direct MSE relative to counts 1,1,1 "
+                "(± 1 standard error of the paired ratio)\n");
+    for (const HardCase& hc : suite()) {
+        if (hc.techniques.size() != 3) continue;
+        Scene scene;
+        hc.build(scene);
+        scene.commit();
+        const int points = int(hc.points.size());
+        const auto ref = reference(scene, hc, 4096, 16, 987654321);
+        std::printf("  %-34s", hc.name.c_str());
+        Errors equal;
+        for (const auto& counts : allocations) {
+            const int rounds = counts == allocations[0] ? 16 : 12;
+            const Errors e = errors(run_counts(scene, hc, Strategy::OptimalDirect, counts, rounds,
+                                               copies, 42),
+                                    ref, points, copies);
+            if (counts == allocations[0]) {
+                equal = e;
+                continue;
+            }
+            const double ratio = e.mse / equal.mse;
+            double var = 0;
+            for (std::size_t i = 0; i < e.squared.size(); ++i) {
+                const double d = e.squared[i] - ratio * equal.squared[i];
+                var += d * d / (e.squared.size() - 1);
+            }
+            std::printf("  %d,%d,%d: %5.3f ± %5.3f", counts[0], counts[1], counts[2], ratio,
+                        std::sqrt(var / e.squared.size()) / equal.mse);
+        }
+        std::printf("\n");
+    }
+    return 0;
+}
+
 int main(int argc, char** argv) {
+    if (argc == 3 && std::string(argv[1]) == "--allocation")
+        return allocation_sweep(std::atoi(argv[2]));
     if (argc == 5 && std::string(argv[1]) == "--cost")
         return cost_run(argv[2], std::atoi(argv[3]), std::atoi(argv[4]));
     const int copies = argc > 1 ? std::atoi(argv[1]) : 64;
     const int reference_rounds = argc > 2 ? std::atoi(argv[2]) : 4096;
-    if (copies < 2 || reference_rounds < 1) {
-        std::fprintf(stderr, "usage: %s [copies ≥ 2] [reference rounds ≥ 1]\n", argv[0]);
+    const std::string only = argc > 3 ? argv[3] : "";  // cases whose name holds this
+    std::vector<int> counts = {1, 4, 16, 64, 256};
+    if (argc > 4) {
+        counts.clear();
+        for (const char* p = argv[4]; *p;) {
+            char* end;
+            counts.push_back(int(std::strtol(p, &end, 10)));
+            p = *end ? end + 1 : end;
+        }
+    }
+    if (copies < 2 || reference_rounds < 1 ||
+        std::any_of(counts.begin(), counts.end(), [](int n) { return n < 1; })) {
+        std::fprintf(stderr,
+                     "usage: %s [copies ≥ 2] [reference rounds ≥ 1] [case name part] "
+                     "[spp,spp,...]\n",
+                     argv[0]);
         return 2;
     }
     const Strategy strategies[3] = {Strategy::Balance, Strategy::OptimalDirect,
@@ -67,6 +126,7 @@ int main(int argc, char** argv) {
                 " neg/zero texels and bias/σ as bal/dir/prog\n\n", copies);
     double worst[2] = {0, 0};
     for (const HardCase& hc : suite()) {
+        if (hc.name.find(only) == std::string::npos) continue;
         Scene scene;
         hc.build(scene);
         scene.commit();
@@ -75,7 +135,7 @@ int main(int argc, char** argv) {
         std::printf("%s (%zu techniques)\n", hc.name.c_str(), hc.techniques.size());
         std::printf("  %5s %17s %17s %11s %11s %17s\n", "spp", "direct/balance",
                     "progr/balance", "negative", "zero", "bias/σ");
-        for (int spp : {1, 4, 16, 64, 256}) {
+        for (int spp : counts) {
             Errors e[3];
             for (int s = 0; s < 3; ++s)
                 e[s] = errors(run(scene, hc, strategies[s], spp, copies, 42), ref, points, copies);

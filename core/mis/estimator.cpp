@@ -43,6 +43,14 @@ using MomentKernel = void (*)(int, int, const double*, const double*, double*, d
 // estimation error. Measured on the hard-case suite (bench_hard_cases).
 constexpr double kProgressiveSamplesPerCoefficient = 8;
 
+// optimal-direct likewise uses no α fitted from fewer than this many samples
+// per free coefficient (+1). In-sample, the fit's error is partly absorbed
+// (the bias), but rule 3's decision itself rests on a residual variance with
+// S − k − 1 degrees of freedom; below 2(k + 1) samples it has fewer degrees of
+// freedom than coefficients and keeps α on lucky draws (issue 10: all ten
+// techniques at one sample each lost to balance by 25 %).
+constexpr double kDirectSamplesPerCoefficient = 2;
+
 MomentKernel select_moment_kernel(int N, int C) {
     if (C == 3) {
         switch (N) {
@@ -123,18 +131,51 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
 
 void MisEstimator::reset() {
     rounds_ = 0;
-    in_round_.assign(N_, 0);
     round_left_ = samples_per_round_;
-    sum_y_.assign(N_ * C_, 0.0);
-    sum_y2_.assign(N_ * C_, 0.0);
-    seen_.assign(N_, 0);
-    const bool optimal = is_optimal(strategy_);
-    a_.assign(optimal ? N_ * N_ : 0, 0.0);
-    b_.assign(optimal ? N_ * C_ : 0, 0.0);
-    m_.assign(optimal ? C_ : 0, 0.0);
-    c_.assign(optimal ? N_ : 0, 0.0);
+    // Sized once, then cleared in place: a reset runs for every point.
+    auto clear = [](auto& v, std::size_t size) {
+        if (v.size() != size) v.resize(size);
+        std::fill(v.begin(), v.end(), 0);
+    };
+    clear(in_round_, N_);
+    clear(sums_, 2 * N_ * C_ + N_ + moments_size());
     snapshots_.clear();  // keeps its capacity: no allocation per point
+    std::fill(stream_sums_.begin(), stream_sums_.end(), 0.0);
+    stream_ = 0;
     negative_f_.fill(false);
+}
+
+void MisEstimator::set_streams(int count) {
+    if (count < 0) throw std::invalid_argument("streams: must not be negative");
+    if (count > 0 && strategy_ == Strategy::OptimalProgressive)
+        throw std::logic_error("streams: optimal-progressive needs an estimator per stream");
+    streams_ = count;
+    stream_ = 0;
+    stream_sums_.assign(std::size_t(count) * stream_stride(), 0.0);
+}
+
+void MisEstimator::set_stream(int s) {
+    if (s < 0 || s >= streams_) throw std::invalid_argument("stream: out of range");
+    if (round_left_ != samples_per_round_)
+        throw std::logic_error("stream: changed inside a round");
+    stream_ = s;
+}
+
+int MisEstimator::stream_rounds(int s) const {
+    return s >= 0 && s < streams_ ? int(stream_sums_[s * stream_stride() + C_ + N_]) : 0;
+}
+
+void MisEstimator::stream_estimates(int s, const double* beta, double* balance,
+                                    double* corrected) const {
+    const double* sums = &stream_sums_[s * stream_stride()];
+    const double R = sums[C_ + N_];
+    for (int c = 0; c < C_; ++c) balance[c] = sums[c] / R;
+    if (!corrected) return;
+    for (int c = 0; c < C_; ++c) corrected[c] = balance[c];
+    for (int k = 0; k < N_; ++k) {
+        const double unseen = 1.0 - sums[C_ + k] / R;  // ĉ_k estimates 1
+        for (int c = 0; c < C_; ++c) corrected[c] += beta[k * C_ + c] * unseen;
+    }
 }
 
 double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
@@ -211,23 +252,30 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     // maximum would overflow the sum, denormal ones lose their digits.
     double q_scaled = 0;
     for (int k = 0; k < N_; ++k) q_scaled += counts_[k] * (pdfs[k] / p_max);
-    auto over_q = [&](double v) { return v / q_scaled / p_max; };
+    // f/q once per channel: the check, the moments and the sums all use it.
+    double fq[kMaxMisChannels];
+    for (int c = 0; c < C_; ++c) fq[c] = f[c] / q_scaled / p_max;
     // Sample values are squared and summed for the variance and the optimal
     // moments; beyond this they would overflow.
     constexpr double kLargestValue = 1e140;
     for (int c = 0; c < C_; ++c)
-        if (!(std::abs(over_q(f[c])) <= kLargestValue))
+        if (!(std::abs(fq[c]) <= kLargestValue))
             throw_bad_sample("f, pdfs: f / (Σ counts·pdfs) exceeds 1e140 (values too large "
                              "or densities too small; its square would overflow)");
 
     if (is_optimal(strategy_)) {
-        double r[kMaxMisTechniques], fq[kMaxMisChannels];
-        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] / p_max / q_scaled;
-        for (int ch = 0; ch < C_; ++ch) {
-            fq[ch] = over_q(f[ch]);
-            negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
+        double r[kMaxMisTechniques];
+        const double inv_q = 1.0 / q_scaled;  // q_scaled ≥ the largest count: no overflow
+        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] / p_max * inv_q;
+        for (int ch = 0; ch < C_; ++ch) negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
+        double* a = moments();
+        double* b = a + N_ * N_;
+        double* m = b + N_ * C_;
+        moment_kernel_(N_, C_, r, fq, a, m + C_, b, m);
+        if (streams_ > 0) {
+            double* stream_c = &stream_sums_[stream_ * stream_stride() + C_];
+            for (int k = 0; k < N_; ++k) stream_c[k] += r[k];
         }
-        moment_kernel_(N_, C_, r, fq, a_.data(), c_.data(), b_.data(), m_.data());
     }
 
     // Y = w_t f / (n_t p_t) = (f/q) · w_t / share_t with share_t = n_t p_t / q
@@ -241,11 +289,12 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
                     : 0.0;
     }
     for (int c = 0; c < C_; ++c) {
-        const double y = over_q(f[c]) * ratio;
-        sum_y_[t * C_ + c] += y;
-        sum_y2_[t * C_ + c] += y * y;
+        const double y = fq[c] * ratio;
+        sum_y()[t * C_ + c] += y;
+        sum_y2()[t * C_ + c] += y * y;
+        if (streams_ > 0) stream_sums_[stream_ * stream_stride() + c] += y;
     }
-    ++seen_[t];
+    ++seen()[t];
 
     ++in_round_[t];
     if (--round_left_ == 0) finish_round();
@@ -255,7 +304,7 @@ void MisEstimator::add_null_sample(int t) {
     if (t < 0 || t >= N_ || in_round_[t] >= counts_[t])
         throw_bad_sample("technique: null sample of technique " + std::to_string(t) +
                          " out of range or beyond its count in this round");
-    ++seen_[t];
+    ++seen()[t];
     ++in_round_[t];
     if (--round_left_ == 0) finish_round();
 }
@@ -280,16 +329,14 @@ void MisEstimator::add_samples(size_t count, const int* technique,
 
 void MisEstimator::finish_round() {
     ++rounds_;
+    if (streams_ > 0) stream_sums_[stream_ * stream_stride() + C_ + N_] += 1;
     std::fill(in_round_.begin(), in_round_.end(), 0);
     round_left_ = samples_per_round_;
     if (strategy_ != Strategy::OptimalProgressive) return;
     // Epoch boundaries for the cross-fit (see progressive_estimate): the
     // running sums after rounds 1, 2, 4, 8, ...
     if ((rounds_ & (rounds_ - 1)) != 0) return;
-    snapshots_.insert(snapshots_.end(), a_.begin(), a_.end());
-    snapshots_.insert(snapshots_.end(), b_.begin(), b_.end());
-    snapshots_.insert(snapshots_.end(), m_.begin(), m_.end());
-    snapshots_.insert(snapshots_.end(), c_.begin(), c_.end());
+    snapshots_.insert(snapshots_.end(), moments(), moments() + moments_size());
 }
 
 void MisEstimator::progressive_estimate(MisResult& out) const {
@@ -302,12 +349,9 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
     // early-round error does not shrink as the later rounds come in. One
     // α per epoch also keeps the correction terms of an epoch cancelling
     // like the balance terms do; log₂R + 1 solves in all.
-    const std::size_t block = a_.size() + b_.size() + m_.size() + c_.size();
-    std::vector<double> total(block), epoch(block);
-    std::copy(a_.begin(), a_.end(), total.begin());
-    std::copy(b_.begin(), b_.end(), total.begin() + a_.size());
-    std::copy(m_.begin(), m_.end(), total.begin() + a_.size() + b_.size());
-    std::copy(c_.begin(), c_.end(), total.begin() + a_.size() + b_.size() + m_.size());
+    const std::size_t block = moments_size();
+    std::vector<double> total(moments(), moments() + block), epoch(block);
+    const double *a_ = a(), *b_ = b(), *m_ = m();
     const int boundaries = int(snapshots_.size() / block);  // at rounds 1, 2, 4, ...
     for (int c = 0; c < C_; ++c) out.estimate[c] = balance_estimate(c);
     int start = 0;
@@ -321,9 +365,9 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
         if (rest_rounds > 0) {
             Moments rest;
             const double* ea = epoch.data();
-            const double* eb = ea + a_.size();
-            const double* em = eb + b_.size();
-            const double* ec = em + m_.size();
+            const double* eb = ea + N_ * N_;
+            const double* em = eb + N_ * C_;
+            const double* ec = em + C_;
             const double Rr = rest_rounds;
             for (int i = 0; i < N_; ++i)
                 for (int j = i; j < N_; ++j)
@@ -347,13 +391,12 @@ void MisEstimator::normalized_moments(Moments& out) const {
     // which holds for the per-round normalisation only.
     const double R = rounds_;
     for (int i = 0; i < N_; ++i)
-        for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = a_[i * N_ + j] / R;
-    for (int i = 0; i < N_ * C_; ++i) out.b[i] = b_[i] / R;
-    for (int c = 0; c < C_; ++c) out.m[c] = m_[c] / R;
+        for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = a()[i * N_ + j] / R;
+    for (int i = 0; i < N_ * C_; ++i) out.b[i] = b()[i] / R;
+    for (int c = 0; c < C_; ++c) out.m[c] = m()[c] / R;
 }
 
-double MisEstimator::correction(const double* alpha, int c, const double* c_sums,
-                                double rounds) const {
+bool MisEstimator::without_n(const double* alpha, int c, double* beta) const {
     // Remove the component of α along n: it adds exactly zero in exact
     // arithmetic (Σ_k n_k (1 − ĉ_k) = 0 over complete rounds) and only rounding
     // noise in floating point. A remainder at rounding level means α ∝ n.
@@ -363,27 +406,42 @@ double MisEstimator::correction(const double* alpha, int c, const double* c_sums
         alpha_max = std::max(alpha_max, std::abs(alpha[k * C_ + c]));
     }
     const double t = n_dot_alpha / n_dot_n_;
-    double beta[kMaxMisTechniques];
     double beta_max = 0;
     for (int k = 0; k < N_; ++k) {
-        beta[k] = alpha[k * C_ + c] - t * counts_[k];
-        beta_max = std::max(beta_max, std::abs(beta[k]));
+        beta[k * C_ + c] = alpha[k * C_ + c] - t * counts_[k];
+        beta_max = std::max(beta_max, std::abs(beta[k * C_ + c]));
     }
     const double rounding = 8 * N_ * std::numeric_limits<double>::epsilon() * alpha_max;
-    if (beta_max <= rounding) return 0.0;
+    if (beta_max > rounding) return true;
+    for (int k = 0; k < N_; ++k) beta[k * C_ + c] = 0;
+    return false;
+}
+
+double MisEstimator::correction(const double* alpha, int c, const double* c_sums,
+                                double rounds) const {
+    double beta[kMaxMisTechniques * kMaxMisChannels];
+    if (!without_n(alpha, c, beta)) return 0.0;
     double sum = 0;
-    for (int k = 0; k < N_; ++k) sum += beta[k] * (1.0 - c_sums[k] / rounds);
+    for (int k = 0; k < N_; ++k) sum += beta[k * C_ + c] * (1.0 - c_sums[k] / rounds);
     return sum;
 }
 
+void MisEstimator::balance_estimates(double* out) const {
+    for (int c = 0; c < C_; ++c) out[c] = 0;
+    for (int t = 0; t < N_; ++t)
+        for (int c = 0; c < C_; ++c) out[c] += sum_y()[t * C_ + c];
+    for (int c = 0; c < C_; ++c) out[c] /= rounds_;
+}
+
+
 double MisEstimator::balance_estimate(int c) const {
     double balance = 0;
-    for (int k = 0; k < N_; ++k) balance += sum_y_[k * C_ + c];
+    for (int k = 0; k < N_; ++k) balance += sum_y()[k * C_ + c];
     return balance / rounds_;
 }
 
 double MisEstimator::control_variate(const double* alpha, int c) const {
-    return balance_estimate(c) + correction(alpha, c, c_.data(), rounds_);
+    return balance_estimate(c) + correction(alpha, c, this->c(), rounds_);
 }
 
 bool MisEstimator::out_of_range(double estimate, int c, double sigmas,
@@ -408,58 +466,76 @@ std::vector<double> MisEstimator::control_variate_estimate(
 }
 
 MisResult MisEstimator::result() const {
-    if (std::any_of(in_round_.begin(), in_round_.end(), [](int v) { return v != 0; }))
+    MisResult out;
+    result(out);
+    return out;
+}
+
+void MisEstimator::direct_estimate(MisResult& out) const {
+    Moments mo;
+    normalized_moments(mo);
+    const double R = rounds_;
+    const SolveResult solved =
+        solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(), counts_.data(),
+                            R * samples_per_round_, kDirectSamplesPerCoefficient);
+    out.rank = solved.rank;
+    // Kept α: the unbiased residual variance of the fit times the cost of
+    // estimating α (solver.h, rule 3); otherwise the estimate is the balance
+    // heuristic's, and so is its variance.
+    const double S = R * samples_per_round_, k = solved.free_coefficients;
+    const double inflation = S / (S - k - 1) * (S - 2) / (S - k - 2);
+    double* beta = out.alpha.data();  // α less its n-component
+    for (int c = 0; c < C_; ++c) {
+        const double balance = balance_estimate(c), balance_variance = heuristic_variance(c);
+        out.estimate[c] = balance;
+        out.variance[c] = balance_variance;
+        if (!solved.kept[c] || !without_n(solved.alpha.data(), c, beta)) continue;
+        double corrected = balance;
+        const double* c_sums = this->c();
+        for (int i = 0; i < N_; ++i) corrected += beta[i * C_ + c] * (1.0 - c_sums[i] / R);
+        if (out_of_range(corrected, c, kDirectFallbackSigmas, balance_variance)) {
+            for (int i = 0; i < N_; ++i) beta[i * C_ + c] = 0;
+            out.fell_back |= 1 << c;
+            continue;
+        }
+        out.estimate[c] = corrected;
+        out.variance[c] = solved.fit_variance[c] * inflation / R;
+        out.fit_inflation = inflation;
+    }
+}
+
+double MisEstimator::heuristic_variance(int c) const {
+    // Stratified variance of (1/R) Σ_s Y_s: (1/R²) Σ_t N_t Var_t(Y), with the
+    // per-technique sample variance (or E[Y²], an upper bound, from one sample).
+    double v = 0;
+    for (int t = 0; t < N_; ++t) {
+        const double n = seen()[t];
+        if (n == 0) continue;
+        const double s = sum_y()[t * C_ + c], s2 = sum_y2()[t * C_ + c];
+        const double var = n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1)) : s2;
+        v += n * var;
+    }
+    return v / (double(rounds_) * rounds_);
+}
+
+void MisEstimator::result(MisResult& out) const {
+    if (round_left_ != samples_per_round_)
         throw std::logic_error("estimate: the last round is incomplete (" +
                                std::to_string(rounds_) + " complete rounds)");
     if (rounds_ == 0)
         throw std::logic_error("estimate: no complete round of samples was added");
-    const double R = rounds_;
-    MisResult out;
     out.rounds = rounds_;
+    out.rank = 0;
+    out.fell_back = 0;
     out.estimate.assign(C_, 0.0);
     out.variance.assign(C_, 0.0);
-
-    // Stratified variance of (1/R) Σ_s Y_s: (1/R²) Σ_t N_t Var_t(Y), with the
-    // per-technique sample variance (or E[Y²], an upper bound, from one sample).
-    auto heuristic_variance = [&](int c) {
-        double v = 0;
-        for (int t = 0; t < N_; ++t) {
-            const double n = double(seen_[t]);
-            if (n == 0) continue;
-            const double s = sum_y_[t * C_ + c], s2 = sum_y2_[t * C_ + c];
-            const double var = n > 1 ? std::max(0.0, (s2 - s * s / n) / (n - 1)) : s2;
-            v += n * var;
-        }
-        return v / (R * R);
-    };
+    out.alpha.assign(strategy_ == Strategy::OptimalDirect ? N_ * C_ : 0, 0.0);
+    out.fit_inflation = 1;
 
     switch (strategy_) {
-        case Strategy::OptimalDirect: {
-            Moments mo;
-            normalized_moments(mo);
-            const SolveResult solved =
-                solve_optimal_alpha(N_, C_, mo.a.data(), mo.b.data(), mo.m.data(),
-                                    counts_.data(), R * samples_per_round_);
-            out.rank = solved.rank;
-            for (int c = 0; c < C_; ++c) out.estimate[c] = control_variate(solved.alpha.data(), c);
-            out.fell_back = 0;
-            // Kept α: the unbiased residual variance of the fit times the cost of
-            // estimating α (solver.h, rule 3); otherwise the estimate is the
-            // balance heuristic's, and so is its variance.
-            const double S = R * samples_per_round_, k = solved.free_coefficients;
-            for (int c = 0; c < C_; ++c)
-                out.variance[c] =
-                    solved.kept[c] ? solved.fit_variance[c] * S / (S - k - 1) * (S - 2) /
-                                         (S - k - 2) / R
-                                   : heuristic_variance(c);
-            for (int c = 0; c < C_; ++c)
-                if (out_of_range(out.estimate[c], c, kDirectFallbackSigmas, heuristic_variance(c))) {
-                    out.estimate[c] = balance_estimate(c);
-                    out.variance[c] = heuristic_variance(c);
-                    out.fell_back |= 1 << c;
-                }
+        case Strategy::OptimalDirect:
+            direct_estimate(out);
             break;
-        }
         case Strategy::OptimalProgressive: {
             progressive_estimate(out);
             for (int c = 0; c < C_; ++c) {
@@ -471,7 +547,6 @@ MisResult MisEstimator::result() const {
                 // so wherever it is a possible value.
                 if (out_of_range(out.estimate[c], c, 0, 0)) {
                     out.estimate[c] = balance_estimate(c);
-                    out.variance[c] = heuristic_variance(c);
                     out.fell_back |= 1 << c;
                 }
             }
@@ -479,13 +554,10 @@ MisResult MisEstimator::result() const {
         }
         default:
             for (int c = 0; c < C_; ++c) {
-                double sum = 0;
-                for (int t = 0; t < N_; ++t) sum += sum_y_[t * C_ + c];
-                out.estimate[c] = sum / R;
+                out.estimate[c] = balance_estimate(c);  // the strategy's own Y sums
                 out.variance[c] = heuristic_variance(c);
             }
     }
-    return out;
 }
 
 }  // namespace omis

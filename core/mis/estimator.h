@@ -24,6 +24,12 @@ struct MisResult {
     // Optimal strategies: bit c set when channel c's estimate left the range
     // the samples allow and the balance estimate was returned instead.
     int fell_back = 0;
+    // optimal-direct: the α behind each channel's estimate less its inert
+    // n-component (N×C, [k*C + c]; zero where the estimate is balance's), and the factor by which its
+    // in-sample residual variance understates the estimate's variance
+    // (solver.h, rule 3: S/(S − k − 1)·(S − 2)/(S − k − 2); 1 without α).
+    std::vector<double> alpha;
+    double fit_inflation = 1;
 };
 
 // optimal-direct falls back to the balance estimate when it differs from it
@@ -56,6 +62,33 @@ public:
     // The estimate over all complete rounds. Throws std::logic_error when a
     // round is incomplete or no round was added.
     MisResult result() const;
+    // The same into `out`, reusing its storage (no allocation per point).
+    void result(MisResult& out) const;
+
+    // The balance heuristic's estimate of channel c from the same samples
+    // (balance and the optimal strategies accumulate it; the other
+    // heuristics' own estimate). Needs complete rounds.
+    double balance_estimate(int c) const;
+    // Every channel's, into out[C].
+    void balance_estimates(double* out) const;
+
+    // Streams (independent randomizations of one point's rounds, issue 7):
+    // with set_streams(K), the samples added while stream s is current also
+    // go to light per-stream sums — Σ Y per channel and, for the optimal
+    // strategies, Σ p_k/q — from which each stream's estimate follows
+    // (stream_estimates), with no estimator per stream. set_streams(0), the
+    // default, keeps none. Both clear the sums; set_stream needs a round
+    // boundary. Not for optimal-progressive, whose per-stream estimate needs
+    // its own cross-fit. Throw std::invalid_argument / std::logic_error.
+    void set_streams(int count);
+    void set_stream(int s);
+    int stream_rounds(int s) const;
+    // Stream s's balance (or heuristic) estimate into balance[C] and, when
+    // corrected is given, that plus Σ_k β_k (1 − ĉ_k) over its own samples
+    // into corrected[C] (β without n-component: MisResult::alpha). No
+    // checks, no allocation.
+    void stream_estimates(int s, const double* beta, double* balance,
+                          double* corrected = nullptr) const;
 
     // The control-variate estimate (SPEC §2) for a given α (N×C, [k*C + c]);
     // any α ∝ n reproduces the balance estimate bit for bit.
@@ -79,11 +112,15 @@ private:
     void normalized_moments(Moments& out) const;
     // Balance estimate plus the control-variate correction for α (N×C).
     double control_variate(const double* alpha, int c) const;
-    double balance_estimate(int c) const;
+    double heuristic_variance(int c) const;
+    void direct_estimate(MisResult& out) const;  // result() of optimal-direct
     // The per-estimate guard (issue 10): a channel's optimal estimate is out of
     // range when it is negative although no sample had f < 0, or (sigmas > 0)
     // when it lies more than `sigmas` balance standard errors from balance.
     bool out_of_range(double estimate, int c, double sigmas, double balance_variance) const;
+    // α less its n-component into beta (channel c); false, with beta = 0,
+    // when the remainder is at rounding level (α ∝ n: balance).
+    bool without_n(const double* alpha, int c, double* beta) const;
     // Σ_k β_k (1 − c_k/R) per channel with β = α less its inert n-component.
     double correction(const double* alpha, int c, const double* c_sums,
                       double rounds) const;
@@ -99,20 +136,37 @@ private:
     std::vector<int> in_round_;  // samples of each technique in the open round
     int round_left_ = 0;         // samples still missing from the open round
 
-    // Per technique t, sums of Y = w_t f/(n_t p_t) and Y² (heuristics; for the
-    // optimal strategies Y is the balance contribution f/q).
-    std::vector<double> sum_y_, sum_y2_;
-    std::vector<long long> seen_;  // samples per technique
+    // Every sum in one block, so that a reset (per point) is one fill. Per technique t, sums of
+    // Y = w_t f/(n_t p_t) and Y² (heuristics; for the optimal strategies Y is
+    // the balance contribution f/q) and its sample count; then, for the
+    // optimal strategies, Σ p_i p_j/q² (a), Σ p_i f/q² (b), Σ f²/q² (m),
+    // Σ p_i/q (c), contiguous in that order (the progressive snapshots' block).
+    std::vector<double> sums_;
+    double* sum_y() { return sums_.data(); }
+    const double* sum_y() const { return sums_.data(); }
+    double* sum_y2() { return sums_.data() + N_ * C_; }
+    const double* sum_y2() const { return sums_.data() + N_ * C_; }
+    double* seen() { return sums_.data() + 2 * N_ * C_; }  // samples per technique
+    const double* seen() const { return sums_.data() + 2 * N_ * C_; }
+    double* moments() { return seen() + N_; }  // a, b, m, c
+    const double* moments() const { return seen() + N_; }
+    std::size_t moments_size() const { return is_optimal(strategy_) ? N_ * N_ + N_ * C_ + C_ + N_ : 0; }
+    const double* a() const { return moments(); }
+    const double* b() const { return moments() + N_ * N_; }
+    const double* m() const { return b() + N_ * C_; }
+    const double* c() const { return m() + C_; }
 
-    // Optimal strategies: Σ p_i p_j/q², Σ p_i f/q², Σ f²/q², Σ p_i/q, and the
-    // accumulation kernel specialised for N and C.
+    // Optimal strategies: the accumulation kernel specialised for N and C.
     void (*moment_kernel_)(int, int, const double*, const double*, double*, double*,
                            double*, double*) = nullptr;
-    std::vector<double> a_, b_, m_, c_;
 
-    // Progressive: the running sums (a_, b_, m_, c_) after rounds 1, 2, 4,
+    // Progressive: the running moments (a, b, m, c) after rounds 1, 2, 4,
     // 8, ..., one block each: the epoch boundaries of the cross-fit.
     std::vector<double> snapshots_;
+    // Per stream: Σ Y per channel, Σ p_k/q per technique (optimal), rounds.
+    int streams_ = 0, stream_ = 0;
+    std::vector<double> stream_sums_;
+    int stream_stride() const { return C_ + N_ + 1; }
     void progressive_estimate(MisResult& out) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};

@@ -83,14 +83,31 @@ struct PointLighting::Impl {
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
                      const Estimators* into, int n_into);
     // Sum of the estimates (and their own variance estimates, if asked).
-    static Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
+    // The estimators' results stay in results_ (main, hidden) until the next call.
+    Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
+    // Stream s's estimate from the whole's per-stream sums (streams_in_whole):
+    // its balance (heuristics: own) estimate, or with the α of the last
+    // estimate_of (optimal-direct: the whole's); and that α's rule-3
+    // inflation of the variance.
+    void stream_of(const Estimators& whole, int s, bool with_alpha, Vec3& balance,
+                   Vec3& corrected) const;
+    double whole_alpha_inflation() const;
     // The balance heuristic's estimate from the same samples (optimal
-    // strategies: the control-variate form with α = 0).
+    // strategies accumulate it alongside their moments).
     static Vec3 balance_of(const Estimators& e);
+    // Whether the whole's estimators keep the per-stream sums (MisEstimator::
+    // set_streams) instead of an estimator per stream: every strategy but
+    // optimal-progressive, whose stream estimates need their own cross-fit.
+    static bool streams_in_whole(Strategy strategy, bool by_stream) {
+        return by_stream && strategy != Strategy::OptimalProgressive;
+    }
+    static void set_streams(const Estimators& all, int count);
+    static void set_stream(const Estimators& all, int s);
+    MisResult results_[2];  // estimate_of's (main, hidden), reused from point to point
     // Optimal strategies: whether the independent streams say the optimal
     // estimate is noisier here than the balance heuristic's.
     static bool balance_is_better(const Vec3* optimal, const Vec3* balance,
-                                  const int* stream_rounds);
+                                  const int* stream_rounds, double optimal_inflation);
 
     struct Integrand {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
@@ -522,11 +539,21 @@ Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
     Vec3 total;
     for (const MisEstimator* m : {e.main, e.hidden}) {
         if (!m) continue;
-        const std::vector<double> zero(std::size_t(m->num_techniques()) * m->num_channels(), 0.0);
-        const std::vector<double> r = m->control_variate_estimate(zero);
-        total += Vec3(r[0], r[1], r[2]);
+        double b[3];
+        m->balance_estimates(b);
+        total += Vec3(b[0], b[1], b[2]);
     }
     return total;
+}
+
+void PointLighting::Impl::set_streams(const Estimators& all, int count) {
+    all.main->set_streams(count);
+    if (all.hidden) all.hidden->set_streams(count);
+}
+
+void PointLighting::Impl::set_stream(const Estimators& all, int s) {
+    all.main->set_stream(s);
+    if (all.hidden) all.hidden->set_stream(s);
 }
 
 // With a low-discrepancy sequence the balance heuristic can converge faster
@@ -537,7 +564,7 @@ Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
 // weighted by the streams' rounds). A selection from 4 streams is noisy, but
 // it picks between two unbiased-or-consistent estimates of the same value.
 bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* balance,
-                                            const int* stream_rounds) {
+                                            const int* stream_rounds, double optimal_inflation) {
     double rounds = 0, mean_o = 0, mean_b = 0;
     double opt[kSampleStreams], bal[kSampleStreams];
     for (int s = 0; s < kSampleStreams; ++s) {
@@ -556,18 +583,43 @@ bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* bal
         spread_o += stream_rounds[s] * (opt[s] - mean_o) * (opt[s] - mean_o);
         spread_b += stream_rounds[s] * (bal[s] - mean_b) * (bal[s] - mean_b);
     }
-    return spread_b < spread_o;
+    return spread_b < spread_o * optimal_inflation;
 }
 
 Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
     Vec3 total;
-    for (const MisEstimator* m : {e.main, e.hidden}) {
-        if (!m) continue;
-        const MisResult r = m->result();
+    const MisEstimator* estimators[2] = {e.main, e.hidden};
+    for (int i = 0; i < 2; ++i) {
+        if (!estimators[i]) continue;
+        MisResult& r = results_[i];
+        estimators[i]->result(r);
         total += Vec3(r.estimate[0], r.estimate[1], r.estimate[2]);
         if (variance) *variance += Vec3(r.variance[0], r.variance[1], r.variance[2]);
     }
     return total;
+}
+
+// With the whole's α fixed, a stream's estimate is its balance estimate plus
+// its own control-variate correction: no solve per stream. The spread of
+// these over the streams is that of the optimal estimate without α's
+// estimation noise, and in-sample slightly optimistic; rule 3's inflation
+// (whole_alpha_inflation) restores both, as for the estimate's own variance.
+void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool with_alpha,
+                                    Vec3& balance, Vec3& corrected) const {
+    balance = corrected = Vec3();
+    const MisEstimator* estimators[2] = {whole.main, whole.hidden};
+    for (int i = 0; i < 2; ++i) {
+        if (!estimators[i]) continue;
+        double b[3], e[3];
+        estimators[i]->stream_estimates(s, results_[i].alpha.data(), b,
+                                        with_alpha ? e : nullptr);
+        balance += Vec3(b[0], b[1], b[2]);
+        corrected += with_alpha ? Vec3(e[0], e[1], e[2]) : Vec3(b[0], b[1], b[2]);
+    }
+}
+
+double PointLighting::Impl::whole_alpha_inflation() const {
+    return std::max(results_[0].fit_inflation, results_[1].fit_inflation);
 }
 
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
@@ -596,6 +648,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // for the optimal strategies' choice against balance (balance_is_better).
     const bool by_stream =
         streams_used >= 2 && (variance || is_optimal(p_.settings.strategy));
+    const bool in_whole = streams_in_whole(p_.settings.strategy, by_stream);
 
     // Estimators: one over all rounds, and one per stream for the error.
     const bool fresh = counts_in != nullptr;  // counts differ from the cached ones
@@ -603,7 +656,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     Estimators all{nullptr, nullptr}, per[K] = {};
     const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
     for (int s = -1; s < K && !active.all.empty(); ++s) {
-        if (s >= 0 && (!by_stream || stream_rounds[s] == 0)) continue;
+        if (s >= 0 && (!by_stream || in_whole || stream_rounds[s] == 0)) continue;
         const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
         Estimators& e = s < 0 ? all : per[s];
         if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
@@ -612,6 +665,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
                                   fresh);
     }
+    if (!active.all.empty()) set_streams(all, in_whole ? K : 0);
 
     // Delta lights are evaluated once per round where positions vary or lights
     // are drawn, else once at the centre.
@@ -634,34 +688,47 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             delta_sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
         }
         const Estimators into[2] = {all, per[s]};
+        if (in_whole && !active.all.empty()) set_stream(all, s);
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
             const ScrambledSobol seq = sequence(std::size_t(k), s);
             for (int j = 0; j < counts[k]; ++j)
                 take_sample(active, a, seq,
                             round_in_stream * std::uint32_t(p_.settings.samples[k]) + j, centre,
-                            footprint, into, by_stream ? 2 : 1);
+                            footprint, into, by_stream && !in_whole ? 2 : 1);
         }
     }
 
     Vec3 own_variance;
     Vec3 total = delta_per_round || p_.delta.empty() ? Vec3() : delta_lighting(centre, 0.0);
-    // Each stream's estimate, solved once: the optimal strategies compare it
-    // with balance's (balance_is_better), and the chosen one's spread is the error.
+    // The whole's estimate, then each stream's: the optimal strategies compare
+    // it with balance's (balance_is_better), and the chosen one's spread is
+    // the error. optimal-direct applies the whole's α to every stream.
     const bool optimal = is_optimal(p_.settings.strategy);
+    const bool direct = p_.settings.strategy == Strategy::OptimalDirect;
+    Vec3 whole;
+    double inflation = 1;
+    if (!active.all.empty()) {
+        for (MisResult& r : results_) r.fit_inflation = 1;  // no hidden estimator: none
+        whole = estimate_of(all, &own_variance);
+        if (direct) inflation = whole_alpha_inflation();
+    }
     Vec3 stream_estimate[K], stream_balance[K];
     if (by_stream && !active.all.empty())
         for (int s = 0; s < K; ++s) {
             if (!stream_rounds[s]) continue;
-            stream_estimate[s] = estimate_of(per[s]);
-            if (optimal) stream_balance[s] = balance_of(per[s]);
+            if (!in_whole) {  // optimal-progressive: its own cross-fit per stream
+                stream_balance[s] = balance_of(per[s]);
+                stream_estimate[s] = estimate_of(per[s]);
+                continue;
+            }
+            // The heuristics' own estimate; optimal-direct's with the whole's α.
+            stream_of(all, s, direct, stream_balance[s], stream_estimate[s]);
         }
-    const bool use_balance = !active.all.empty() && by_stream && optimal &&
-                             balance_is_better(stream_estimate, stream_balance, stream_rounds);
-    if (!active.all.empty()) {
-        const Vec3 optimal = estimate_of(all, &own_variance);
-        total += use_balance ? balance_of(all) : optimal;
-    }
+    const bool use_balance =
+        !active.all.empty() && by_stream && optimal &&
+        balance_is_better(stream_estimate, stream_balance, stream_rounds, inflation);
+    if (!active.all.empty()) total += use_balance ? balance_of(all) : whole;
     Vec3 delta_total;
     for (const Vec3& d : delta_sum) delta_total += d;
     total += delta_total / double(rounds);

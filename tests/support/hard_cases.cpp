@@ -106,10 +106,17 @@ std::vector<HardCase> suite() {
 
 std::vector<double> run(const Scene& scene, const HardCase& hard_case, Strategy strategy,
                         int spp, int copies, std::uint64_t seed) {
+    return run_counts(scene, hard_case, strategy,
+                      std::vector<int>(hard_case.techniques.size(), 1), spp, copies, seed);
+}
+
+std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, Strategy strategy,
+                               const std::vector<int>& counts, int rounds, int copies,
+                               std::uint64_t seed) {
     DirectLightingSettings s;
     for (const auto& name : hard_case.techniques) s.techniques.push_back(*parse_technique(name));
-    s.samples.assign(s.techniques.size(), 1);
-    s.rounds = spp;
+    s.samples = counts;
+    s.rounds = rounds;
     s.strategy = strategy;
     s.seed = seed;
     std::vector<double> points, normals;

@@ -30,6 +30,10 @@ std::vector<HardCase> suite();
 // RGB values of every (point, copy), point-major: [(p*copies + k)*3 + c].
 std::vector<double> run(const Scene& scene, const HardCase& hard_case, Strategy strategy,
                         int spp, int copies, std::uint64_t seed);
+// The same with `counts` samples per technique per round and `rounds` rounds.
+std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, Strategy strategy,
+                               const std::vector<int>& counts, int rounds, int copies,
+                               std::uint64_t seed);
 
 // Per point and channel, the mean of `copies` balance runs of `rounds` rounds:
 // the reference the errors are measured against.
