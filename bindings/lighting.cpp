@@ -5,10 +5,47 @@
 namespace omis_py {
 namespace {
 
+// A committed OMISDirectLighting job for these settings; errors name the
+// Python argument.
+omis::capi::DirectLightingRef lighting_job(const Scene& scene, const TechniqueArgs& t, int rounds,
+                                           const std::string& strategy,
+                                           const py::handle& seed, double beta, double cutoff) {
+    omis::capi::DirectLightingRef job(omisNewDirectLighting(scene.get()));
+    if (!job) raise_pending_error();
+    OMISDirectLighting l = job.get();
+    if (!t.names.empty()) {
+        for (std::size_t k = 0; k < t.samples.size(); ++k)
+            if (t.samples[k] < 0) bad("samples", "entry " + std::to_string(k) + " is negative");
+        omisSetDirectLightingString(l, "techniques", t.names.c_str());
+        omisSetDirectLightingCounts(l, t.samples.data(), int(t.samples.size()));
+    }
+    omisSetDirectLightingInt(l, "rounds", rounds);
+    omisSetDirectLightingString(l, "strategy", c_string(strategy, "strategy"));
+    omisSetDirectLightingInt(l, "seed", std::int64_t(seed_value(seed)));
+    omisSetDirectLightingFloat(l, "beta", beta);
+    omisSetDirectLightingFloat(l, "cutoff", cutoff);
+    raise_if_pending();  // the first setting refused, named
+    omisCommitDirectLighting(l);
+    raise_if_pending();
+    return job;
+}
+
+py::dict stats_dict(const OMISDirectLightingStats& stats, const std::string& plan) {
+    py::dict d;
+    d["points"] = stats.points;
+    d["samples"] = stats.samples;
+    d["rays_traced"] = stats.raysTraced;
+    d["mis_systems"] = stats.misSystems;
+    d["pdf_evaluations"] = stats.pdfEvaluations;
+    d["seconds"] = stats.seconds;
+    d["plan"] = plan;
+    return d;
+}
+
 py::object direct_lighting(const Scene& scene, const py::handle& points_in,
                            const py::handle& normals_in, const py::handle& techniques,
-                           const py::handle& samples, int rounds, const std::string& strategy_name,
-                           const py::handle& seed_in, double beta, double cutoff,
+                           const py::handle& samples, int rounds, const std::string& strategy,
+                           const py::handle& seed, double beta, double cutoff,
                            const py::object& progress, bool return_stats) {
     auto points = as_float_array(points_in, "points");
     auto normals = as_float_array(normals_in, "normals");
@@ -19,45 +56,19 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
         bad("normals", "expected shape (" + std::to_string(P) + ", 3) like points, got " +
                            shape_of(normals));
     const TechniqueArgs t = technique_args(techniques, samples);
-    OMISStrategy strategy;
-    if (!omisParseStrategy(c_string(strategy_name, "strategy"), &strategy))
-        bad("strategy", "unknown strategy '" + strategy_name +
-                            "' (balance, power, maximum, cutoff, optimal-direct, "
-                            "optimal-progressive)");
-    std::uint64_t seed;
-    {
-        py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
-        if (!index) {
-            PyErr_Clear();
-            bad("seed", "expected a non-negative integer");
-        }
-        seed = PyLong_AsUnsignedLongLong(index.ptr());
-        if (PyErr_Occurred()) {
-            PyErr_Clear();
-            bad("seed", "expected an integer in [0, 2**64)");
-        }
-    }
     if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
         bad("progress", "expected a callable taking the fraction done");
+    const auto job = lighting_job(scene, t, rounds, strategy, seed, beta, cutoff);
 
     py::array_t<double> value({P, py::ssize_t(3)}), variance({P, py::ssize_t(3)});
     OMISDirectLightingStats stats{};
     run_interruptible("direct_lighting", progress, [&](NativeRun& run) {
-        return omisDirectLighting(scene.get(), points.data(), normals.data(), size_t(P),
-                                  t.names.c_str(), t.samples_ptr(), rounds, strategy, beta,
-                                  cutoff, seed, value.mutable_data(), variance.mutable_data(),
-                                  &stats, on_progress, &run);
+        omisSetDirectLightingProgressFunction(job.get(), on_progress, &run);
+        return omisExecuteDirectLighting(job.get(), points.data(), normals.data(), size_t(P),
+                                         value.mutable_data(), variance.mutable_data(), &stats);
     });
     if (!return_stats) return py::make_tuple(value, variance);
-    py::dict d;
-    d["points"] = stats.points;
-    d["samples"] = stats.samples;
-    d["rays_traced"] = stats.raysTraced;
-    d["mis_systems"] = stats.misSystems;
-    d["pdf_evaluations"] = stats.pdfEvaluations;
-    d["seconds"] = stats.seconds;
-    d["plan"] = plan_text(scene, t);
-    return py::make_tuple(value, variance, d);
+    return py::make_tuple(value, variance, stats_dict(stats, plan_text(scene, t)));
 }
 
 }  // namespace
