@@ -31,15 +31,11 @@ omis::capi::DirectLightingRef lighting_job(const Scene& scene, const TechniqueAr
 }
 
 py::dict stats_dict(const OMISDirectLightingStats& stats, const std::string& plan) {
-    py::dict d;
-    d["points"] = stats.points;
-    d["samples"] = stats.samples;
-    d["rays_traced"] = stats.raysTraced;
-    d["mis_systems"] = stats.misSystems;
-    d["pdf_evaluations"] = stats.pdfEvaluations;
-    d["seconds"] = stats.seconds;
-    d["plan"] = plan;
-    return d;
+    using namespace pybind11::literals;
+    return py::dict("points"_a = stats.points, "samples"_a = stats.samples,
+                    "rays_traced"_a = stats.raysTraced, "mis_systems"_a = stats.misSystems,
+                    "pdf_evaluations"_a = stats.pdfEvaluations, "seconds"_a = stats.seconds,
+                    "plan"_a = plan);
 }
 
 py::object direct_lighting(const Scene& scene, const py::handle& points_in,

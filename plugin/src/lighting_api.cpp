@@ -16,53 +16,20 @@ using namespace omis::api;
 
 namespace {
 
-// The parameters set by name, with the function that sets each.
-enum class ParameterType { Int, Float, String };
+// A parameter's type: which of the three setters takes it.
+enum ParameterType { kInt, kFloat, kString };
+constexpr const char* kTypeNames[] = {"integer", "float", "string"};
+constexpr const char* kSetters[] = {"omisSetDirectLightingInt", "omisSetDirectLightingFloat",
+                                    "omisSetDirectLightingString"};
 
-struct ParameterName {
-    const char* name;
+// A value as one of the setters received it.
+struct ParameterValue {
+    explicit ParameterValue(ParameterType t) : type(t) {}
     ParameterType type;
+    std::int64_t integer = 0;
+    double real = 0;
+    std::string text;
 };
-
-constexpr ParameterName kParameters[] = {
-    {"rounds", ParameterType::Int},        {"seed", ParameterType::Int},
-    {"beta", ParameterType::Float},        {"cutoff", ParameterType::Float},
-    {"techniques", ParameterType::String}, {"strategy", ParameterType::String},
-};
-
-const char* type_word(ParameterType type) {
-    switch (type) {
-        case ParameterType::Int: return "integer";
-        case ParameterType::Float: return "float";
-        case ParameterType::String: return "string";
-    }
-    return "?";
-}
-
-const char* setter_of(ParameterType type) {
-    switch (type) {
-        case ParameterType::Int: return "omisSetDirectLightingInt";
-        case ParameterType::Float: return "omisSetDirectLightingFloat";
-        case ParameterType::String: return "omisSetDirectLightingString";
-    }
-    return "?";
-}
-
-// The error for a name the setter of `type` does not take: either it belongs
-// to another setter, or no parameter has it.
-std::invalid_argument unknown_parameter(const std::string& key, ParameterType type) {
-    std::string known;
-    for (const ParameterName& p : kParameters) {
-        if (key == p.name)
-            return std::invalid_argument("name: '" + key + "' is " +
-                                         (p.type == ParameterType::Int ? "an " : "a ") +
-                                         type_word(p.type) + " parameter; set it with " +
-                                         setter_of(p.type));
-        if (p.type == type) known += std::string(known.empty() ? "" : ", ") + p.name;
-    }
-    return std::invalid_argument("name: unknown " + std::string(type_word(type)) +
-                                 " direct-lighting parameter '" + key + "' (" + known + ")");
-}
 
 // "balance, power, ...": every strategy's interface name, from the core.
 std::string strategy_list() {
@@ -107,147 +74,149 @@ std::vector<double> unit_normals(const double* points, const double* normals,
 }
 
 OMISDirectLightingStats to_c(const omis::DirectLightingStats& r) {
-    OMISDirectLightingStats out{};
-    out.points = r.points;
-    out.samples = r.samples;
-    out.raysTraced = r.rays_traced;
-    out.misSystems = r.mis_systems;
-    out.pdfEvaluations = r.pdf_evaluations;
-    out.seconds = r.seconds;
-    return out;
+    return {r.points, r.samples, r.rays_traced, r.mis_systems, r.pdf_evaluations, r.seconds};
 }
 
 }  // namespace
 
 struct OMISDirectLightingImpl : Tagged<0x5448474c> {  // "LGHT"
-    OMISSceneImpl* scene = nullptr;  // retained
+    OMISSceneImpl* const scene;      // retained
     omis::DirectLightingSettings settings;
     std::string techniques;          // as set; resolved by commit
     std::vector<int> counts;
     bool committed = false;
 
-    std::mutex progress_mutex;  // the progress function may be set while others execute
-    OMISProgressFunction progress = nullptr;
-    void* progress_user = nullptr;
+    ProgressSlot progress;
 
-    ~OMISDirectLightingImpl() override {
-        if (scene) release(scene);
-    }
+    explicit OMISDirectLightingImpl(OMISSceneImpl* s) : scene(s) { retain(s); }
+    ~OMISDirectLightingImpl() override { release(scene); }
     void require_uncommitted(const std::string& what) const {
         if (committed)
             throw ApiError(OMIS_ERROR_INVALID_OPERATION,
                            what + ": parameters cannot change after omisCommitDirectLighting");
     }
-    omis::ProgressFunction progress_function() {
-        std::lock_guard<std::mutex> lock(progress_mutex);
-        if (!progress) return nullptr;
-        const OMISProgressFunction fn = progress;
-        void* user = progress_user;
-        return [fn, user](double fraction) { return fn(user, fraction); };
-    }
 };
 
-OMIS_API OMISDirectLighting omisNewDirectLighting(OMISScene scene) {
-    return guarded<OMISDirectLighting>(nullptr, [&] {
-        auto* s = checked(scene, "scene");
-        auto lighting = std::make_unique<OMISDirectLightingImpl>();
-        retain(s);
-        lighting->scene = s;
-        return lighting.release();
+namespace {
+
+using Lighting = OMISDirectLightingImpl;
+
+void set_rounds(Lighting& l, const ParameterValue& v) {
+    if (v.integer < 1 || v.integer > (1 << 20))
+        throw std::invalid_argument("rounds: " + std::to_string(v.integer) +
+                                    " is out of range [1, 1048576]");
+    l.settings.rounds = int(v.integer);
+}
+void set_seed(Lighting& l, const ParameterValue& v) {
+    l.settings.seed = std::uint64_t(v.integer);
+}
+void set_beta(Lighting& l, const ParameterValue& v) {
+    if (!(v.real > 0) || !std::isfinite(v.real))
+        throw std::invalid_argument("beta: must be a positive finite number, got " +
+                                    std::to_string(v.real));
+    l.settings.options.beta = v.real;
+}
+void set_cutoff(Lighting& l, const ParameterValue& v) {
+    if (!(v.real >= 0 && v.real <= 1))
+        throw std::invalid_argument("cutoff: must lie in [0, 1], got " + std::to_string(v.real));
+    l.settings.options.cutoff = v.real;
+}
+void set_techniques(Lighting& l, const ParameterValue& v) {
+    if (!v.text.empty()) parse_technique_list(v.text);  // names checked now, counts at commit
+    l.techniques = v.text;
+}
+void set_strategy(Lighting& l, const ParameterValue& v) {
+    const auto strategy = omis::parse_strategy(v.text);
+    if (!strategy)
+        throw std::invalid_argument("strategy: unknown strategy '" + v.text + "' (" +
+                                    strategy_list() + ")");
+    l.settings.strategy = *strategy;
+}
+
+// Every parameter set by name (omis.h lists them with their defaults).
+struct Parameter {
+    const char* name;
+    ParameterType type;
+    void (*set)(Lighting&, const ParameterValue&);  // validates, then stores
+};
+constexpr Parameter kParameters[] = {
+    {"rounds", kInt, set_rounds},           {"seed", kInt, set_seed},
+    {"beta", kFloat, set_beta},             {"cutoff", kFloat, set_cutoff},
+    {"techniques", kString, set_techniques}, {"strategy", kString, set_strategy},
+};
+
+// What every setter does: find the parameter, check it takes this type, set it.
+// Errors name an unknown parameter (with the known ones of that type) or the
+// setter that takes it.
+void set_parameter(OMISDirectLighting lighting, const char* name, const ParameterValue& value) {
+    guarded_void([&] {
+        auto* l = checked(lighting, "lighting");
+        const std::string key = checked(name, "name");
+        l->require_uncommitted(key);
+        std::string known;
+        for (const Parameter& p : kParameters) {
+            if (key == p.name && p.type == value.type) return p.set(*l, value);
+            if (key == p.name)
+                throw std::invalid_argument("name: '" + key + "' is " +
+                                            (p.type == kInt ? "an " : "a ") +
+                                            kTypeNames[p.type] + " parameter; set it with " +
+                                            kSetters[p.type]);
+            if (p.type == value.type) known += std::string(known.empty() ? "" : ", ") + p.name;
+        }
+        throw std::invalid_argument("name: unknown " + std::string(kTypeNames[value.type]) +
+                                    " direct-lighting parameter '" + key + "' (" + known + ")");
     });
 }
 
+}  // namespace
+
+OMIS_API OMISDirectLighting omisNewDirectLighting(OMISScene scene) {
+    return guarded<OMISDirectLighting>(
+        nullptr, [&] { return new OMISDirectLightingImpl(checked(scene, "scene")); });
+}
+
 OMIS_API void omisRetainDirectLighting(OMISDirectLighting lighting) {
-    guarded_void([&] { retain(checked(lighting, "lighting")); });
+    retain_handle(lighting, "lighting");
 }
 OMIS_API void omisReleaseDirectLighting(OMISDirectLighting lighting) {
-    guarded_void([&] { release(checked(lighting, "lighting")); });
+    release_handle(lighting, "lighting");
 }
 
 OMIS_API void omisSetDirectLightingInt(OMISDirectLighting lighting, const char* name,
                                        int64_t value) {
-    guarded_void([&] {
-        auto* l = checked(lighting, "lighting");
-        const std::string key = checked(name, "name");
-        l->require_uncommitted(key);
-        if (key == "rounds") {
-            if (value < 1 || value > (1 << 20))
-                throw std::invalid_argument("rounds: " + std::to_string(value) +
-                                            " is out of range [1, 1048576]");
-            l->settings.rounds = int(value);
-        } else if (key == "seed") {
-            l->settings.seed = std::uint64_t(value);
-        } else {
-            throw unknown_parameter(key, ParameterType::Int);
-        }
-    });
+    ParameterValue v(kInt);
+    v.integer = value;
+    set_parameter(lighting, name, v);
 }
 
 OMIS_API void omisSetDirectLightingFloat(OMISDirectLighting lighting, const char* name,
                                          double value) {
-    guarded_void([&] {
-        auto* l = checked(lighting, "lighting");
-        const std::string key = checked(name, "name");
-        l->require_uncommitted(key);
-        auto& options = l->settings.options;
-        if (key == "beta") {
-            if (!(value > 0) || !std::isfinite(value))
-                throw std::invalid_argument("beta: must be a positive finite number, got " +
-                                            std::to_string(value));
-            options.beta = value;
-        } else if (key == "cutoff") {
-            if (!(value >= 0 && value <= 1))
-                throw std::invalid_argument("cutoff: must lie in [0, 1], got " +
-                                            std::to_string(value));
-            options.cutoff = value;
-        } else {
-            throw unknown_parameter(key, ParameterType::Float);
-        }
-    });
+    ParameterValue v(kFloat);
+    v.real = value;
+    set_parameter(lighting, name, v);
 }
 
 OMIS_API void omisSetDirectLightingString(OMISDirectLighting lighting, const char* name,
                                           const char* value) {
-    guarded_void([&] {
-        auto* l = checked(lighting, "lighting");
-        const std::string key = checked(name, "name");
-        l->require_uncommitted(key);
-        const std::string v = value ? value : "";
-        if (key == "techniques") {
-            if (!v.empty()) parse_technique_list(v);  // names checked now, counts at commit
-            l->techniques = v;
-        } else if (key == "strategy") {
-            const auto strategy = omis::parse_strategy(v);
-            if (!strategy)
-                throw std::invalid_argument("strategy: unknown strategy '" + v + "' (" +
-                                            strategy_list() + ")");
-            l->settings.strategy = *strategy;
-        } else {
-            throw unknown_parameter(key, ParameterType::String);
-        }
-    });
+    ParameterValue v(kString);
+    v.text = value ? value : "";
+    set_parameter(lighting, name, v);
 }
 
 OMIS_API void omisSetDirectLightingCounts(OMISDirectLighting lighting, const int* counts,
                                           int numCounts) {
     guarded_void([&] {
+        std::vector<int> copy = counts_argument(counts, numCounts);
         auto* l = checked(lighting, "lighting");
         l->require_uncommitted("counts");
-        if (numCounts < 0) throw std::invalid_argument("numCounts: must not be negative");
-        if (numCounts > 0) checked(counts, "counts");
-        l->counts.assign(counts, counts + numCounts);
+        l->counts = std::move(copy);
     });
 }
 
 OMIS_API void omisSetDirectLightingProgressFunction(OMISDirectLighting lighting,
                                                     OMISProgressFunction progress,
                                                     void* user) {
-    guarded_void([&] {
-        auto* l = checked(lighting, "lighting");
-        std::lock_guard<std::mutex> lock(l->progress_mutex);
-        l->progress = progress;
-        l->progress_user = user;
-    });
+    guarded_void([&] { checked(lighting, "lighting")->progress.set(progress, user); });
 }
 
 OMIS_API void omisCommitDirectLighting(OMISDirectLighting lighting) {
@@ -290,7 +259,7 @@ OMIS_API bool omisExecuteDirectLighting(OMISDirectLighting lighting, const doubl
         }
         const omis::DirectLightingStats r =
             omis::direct_lighting(l->scene->scene, points, unit.data(), count, l->settings,
-                                  value, variance, l->progress_function());
+                                  value, variance, l->progress.get());
         if (stats) *stats = to_c(r);
         if (r.cancelled)
             throw ApiError(OMIS_ERROR_CANCELLED,
