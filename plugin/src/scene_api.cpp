@@ -1,5 +1,6 @@
 // C ABI of scenes (omis.h, "Scenes and direct lighting"; the lighting job is in lighting_api.cpp).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -70,6 +71,20 @@ unsigned int add_light(OMISScene scene, const char* what, Make&& make) {
         const omis::Light light = make();  // validates before taking the lock
         auto lock = s->lock_for_build(what);
         return static_cast<unsigned int>(s->scene.add_light(light));
+    });
+}
+
+// Rect and ellipse lights: a point and two perpendicular vectors, each checked
+// under its own argument name.
+using PlanarFactory = omis::Light (*)(const omis::Vec3&, const omis::Vec3&, const omis::Vec3&,
+                                      const omis::Vec3&, bool, double);
+unsigned int add_planar_light(OMISScene scene, const char* what, PlanarFactory make,
+                              const std::array<const double*, 3>& frame,
+                              const std::array<const char*, 3>& names,
+                              const double* radiance, bool two_sided, double spread) {
+    return add_light(scene, what, [&] {
+        return make(vec3(frame[0], names[0]), vec3(frame[1], names[1]),
+                    vec3(frame[2], names[2]), vec3(radiance, "radiance"), two_sided, spread);
     });
 }
 
@@ -146,11 +161,11 @@ OMIS_API OMISScene omisNewScene(void) {
 }
 
 OMIS_API void omisRetainScene(OMISScene scene) {
-    guarded_void([&] { retain(checked(scene, "scene")); });
+    retain_handle(scene, "scene");
 }
 
 OMIS_API void omisReleaseScene(OMISScene scene) {
-    guarded_void([&] { release(checked(scene, "scene")); });
+    release_handle(scene, "scene");
 }
 
 OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices,
@@ -195,26 +210,21 @@ OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices,
 }
 
 OMIS_API unsigned int omisAddRectLight(OMISScene scene, const double corner[3],
-                                            const double edgeU[3], const double edgeV[3],
-                                            const double radiance[3], bool twoSided,
-                                            double spread) {
-    return add_light(scene, "omisAddRectLight", [&] {
-        return omis::make_rect_light(vec3(corner, "corner"), vec3(edgeU, "edgeU"),
-                                     vec3(edgeV, "edgeV"), vec3(radiance, "radiance"),
-                                     twoSided, spread);
-    });
+                                       const double edgeU[3], const double edgeV[3],
+                                       const double radiance[3], bool twoSided,
+                                       double spread) {
+    return add_planar_light(scene, "omisAddRectLight", omis::make_rect_light,
+                            {corner, edgeU, edgeV}, {"corner", "edgeU", "edgeV"}, radiance,
+                            twoSided, spread);
 }
 
 OMIS_API unsigned int omisAddEllipseLight(OMISScene scene, const double center[3],
-                                               const double axisA[3],
-                                               const double axisB[3],
-                                               const double radiance[3], bool twoSided,
-                                               double spread) {
-    return add_light(scene, "omisAddEllipseLight", [&] {
-        return omis::make_ellipse_light(vec3(center, "center"), vec3(axisA, "axisA"),
-                                        vec3(axisB, "axisB"), vec3(radiance, "radiance"),
-                                        twoSided, spread);
-    });
+                                          const double axisA[3], const double axisB[3],
+                                          const double radiance[3], bool twoSided,
+                                          double spread) {
+    return add_planar_light(scene, "omisAddEllipseLight", omis::make_ellipse_light,
+                            {center, axisA, axisB}, {"center", "axisA", "axisB"}, radiance,
+                            twoSided, spread);
 }
 
 OMIS_API unsigned int omisAddPointLight(OMISScene scene, const double position[3],

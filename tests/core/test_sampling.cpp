@@ -240,6 +240,72 @@ TEST_CASE("sun cone", "[sampling]") {
     }
 }
 
+namespace {
+
+// What the disk samplers' checks allow in a configuration (see Config).
+struct DiskAllowances {
+    bool check_mean = true;
+    double invert_tol = 1e-6;
+};
+
+// Area and (where it applies) parallel sampling of a light that shows x a disk or
+// ellipse — an ellipse light itself, or a sphere light's facing disk — binned in
+// rings and sectors of the disk's (α, β).
+template <class Light>
+void check_disk_samplers(const std::string& shape, const Light& L, const EllipseLight& disk,
+                         const Vec3& x, const Vec3& n, double omega,
+                         const DiskAllowances& allow, int& seed) {
+    auto bins = [&](SamplerUnderTest& t) {
+        t.bin = [&](const Vec3& w) {
+            const auto h = L.intersect(x, w);
+            return h ? ellipse_bin(h->uv) : -1;
+        };
+        t.measure = omega;
+        t.check_mean = allow.check_mean;
+    };
+    {
+        SamplerUnderTest t;
+        t.name = shape + " area";
+        t.sample = [&](double u1, double u2) { return L.sample_area(x, u1, u2); };
+        t.pdf = [&](const Vec3& w) { return L.pdf_area(x, w); };
+        t.invert = [&](const Vec3& w) -> std::optional<Point2> {
+            const auto h = L.intersect(x, w);
+            if (!h || h->uv.x * h->uv.x + h->uv.y * h->uv.y < 1e-6) return std::nullopt;
+            return invert_uniform_disk(h->uv);
+        };
+        bins(t);
+        t.cell_prob.assign(K * K, 1.0 / (K * K));
+        run_sampler_check(t, seed++);
+    }
+    const auto pe = disk.parallel(x, n);
+    INFO("parallel applicable " << bool(pe));
+    if (!pe) {
+        CHECK(L.pdf_parallel(x, n, normalize(disk.center - x)) == 0);
+        CHECK_FALSE(L.sample_parallel(x, n, 0.5, 0.5));
+        return;
+    }
+    SamplerUnderTest t;
+    t.name = shape + " parallel";
+    t.sample = [&](double u1, double u2) { return L.sample_parallel(x, n, u1, u2); };
+    t.pdf = [&](const Vec3& w) { return L.pdf_parallel(x, n, w); };
+    t.invert = [&](const Vec3& w) -> std::optional<Point2> {
+        const Point2 u = pe->invert(w);
+        if (u.x < 1e-6) return std::nullopt;  // polar map: azimuth undefined at 0
+        return u;
+    };
+    bins(t);
+    for (int i = 0; i < K; ++i)
+        for (int j = 0; j < K; ++j)
+            t.cell_prob.push_back(
+                projected_area(n, disk.center - x, ellipse_cell(disk.axis_a, disk.axis_b, i, j)) /
+                pe->projected_area());
+    t.prob_sum_tol = 1e-4;
+    t.invert_tol = allow.invert_tol;
+    run_sampler_check(t, seed++);
+}
+
+}  // namespace
+
 TEST_CASE("sphere light (facing disk)", "[sampling]") {
     struct S {
         std::string name;  // for messages only
@@ -274,124 +340,115 @@ TEST_CASE("sphere light (facing disk)", "[sampling]") {
             t.measure = omega;
             run_sampler_check(t, seed++);
         }
-        auto disk_bins = [&](SamplerUnderTest& t) {
-            t.bin = [&](const Vec3& w) {
-                const auto h = L.intersect(c.x, w);
-                return h ? ellipse_bin(h->uv) : -1;
-            };
-        };
-        {
-            SamplerUnderTest t;
-            t.name = "sphere area";
-            t.sample = [&](double u1, double u2) { return L.sample_area(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_area(c.x, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const auto h = L.intersect(c.x, w);
-                if (!h || h->uv.x * h->uv.x + h->uv.y * h->uv.y < 1e-6) return std::nullopt;
-                return invert_uniform_disk(h->uv);
-            };
-            disk_bins(t);
-            t.cell_prob.assign(K * K, 1.0 / (K * K));
-            t.measure = omega;
-            run_sampler_check(t, seed++);
-        }
-        const auto pe = disk.parallel(c.x, c.n);
-        CHECK(bool(pe) == !c.straddles_horizon);
-        if (pe) {
-            SamplerUnderTest t;
-            t.name = "sphere parallel";
-            t.sample = [&](double u1, double u2) { return L.sample_parallel(c.x, c.n, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_parallel(c.x, c.n, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const Point2 u = pe->invert(w);
-                if (u.x < 1e-6) return std::nullopt;  // polar map: azimuth undefined at 0
-                return u;
-            };
-            disk_bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(projected_area(c.n, c.c - c.x,
-                                                         ellipse_cell(disk.axis_a, disk.axis_b, i, j)) /
-                                          pe->projected_area());
-            t.prob_sum_tol = 1e-4;
-            t.measure = omega;
-            run_sampler_check(t, seed++);
-        } else {
-            CHECK(L.pdf_parallel(c.x, c.n, normalize(c.c - c.x)) == 0);
-            CHECK_FALSE(L.sample_parallel(c.x, c.n, 0.5, 0.5));
-        }
+        CHECK(bool(disk.parallel(c.x, c.n)) == !c.straddles_horizon);
+        check_disk_samplers("sphere", L, disk, c.x, c.n, omega, DiskAllowances{}, seed);
     }
 }
+
+namespace {
+
+// A planar polygon light (rect, triangle) as its three samplers' checks need it:
+// cells of its own parametrisation, as offsets from its first vertex, and the
+// area sampler's inversion and exact cell probabilities.
+template <class Light, class Spherical>
+struct PolygonUnderTest {
+    std::string shape;  // in sampler names
+    Light light;
+    std::optional<Spherical> spherical;  // its solid-angle map, for inversion
+    Vec3 first_vertex;
+    std::function<std::vector<Vec3>(int, int)> cell;
+    std::function<int(const ShapeHit&)> bin;
+    std::function<std::optional<Point2>(const ShapeHit&)> invert_area;
+    std::vector<double> area_cell_prob;
+};
+
+// Solid-angle, area and (where it applies) parallel sampling of a polygon light.
+template <class Light, class Spherical>
+void check_polygon_samplers(const PolygonUnderTest<Light, Spherical>& p, const Config& c,
+                            int& seed) {
+    const Light& L = p.light;
+    const Vec3 a = p.first_vertex - c.x;
+    const double omega = L.solid_angle(c.x);
+    // Binned by where the direction hits the light; cell probabilities from `prob`.
+    auto cells = [&](SamplerUnderTest& t, const std::function<double(const std::vector<Vec3>&)>& prob) {
+        t.bin = [&](const Vec3& w) {
+            const auto h = L.intersect(c.x, w);
+            return h ? p.bin(*h) : -1;
+        };
+        if (prob)
+            for (int i = 0; i < K; ++i)
+                for (int j = 0; j < K; ++j) t.cell_prob.push_back(prob(p.cell(i, j)));
+        t.measure = omega;
+    };
+    {
+        REQUIRE(p.spherical);
+        SamplerUnderTest t;
+        t.name = p.shape + " solid-angle";
+        t.sample = [&](double u1, double u2) { return L.sample_solid_angle(c.x, u1, u2); };
+        t.pdf = [&](const Vec3& w) { return L.pdf_solid_angle(c.x, w); };
+        t.invert = [&](const Vec3& w) { return std::optional<Point2>(p.spherical->invert(w)); };
+        cells(t, [&](const std::vector<Vec3>& cell) { return polygon_solid_angle(a, cell) / omega; });
+        t.invert_tol = c.invert_tol;
+        run_sampler_check(t, seed++);
+    }
+    {
+        SamplerUnderTest t;
+        t.name = p.shape + " area";
+        t.sample = [&](double u1, double u2) { return L.sample_area(c.x, u1, u2); };
+        t.pdf = [&](const Vec3& w) { return L.pdf_area(c.x, w); };
+        t.invert = [&](const Vec3& w) -> std::optional<Point2> {
+            const auto h = L.intersect(c.x, w);
+            return h ? p.invert_area(*h) : std::nullopt;
+        };
+        cells(t, nullptr);
+        t.cell_prob = p.area_cell_prob;
+        t.check_mean = !c.heavy_tailed;
+        run_sampler_check(t, seed++);
+    }
+    const auto pp = L.parallel(c.x, c.n);
+    INFO("parallel applicable " << bool(pp));
+    if (pp) {
+        SamplerUnderTest t;
+        t.name = p.shape + " parallel";
+        t.sample = [&](double u1, double u2) { return L.sample_parallel(c.x, c.n, u1, u2); };
+        t.pdf = [&](const Vec3& w) { return L.pdf_parallel(c.x, c.n, w); };
+        t.invert = [&](const Vec3& w) { return std::optional<Point2>(pp->invert(w)); };
+        cells(t, [&](const std::vector<Vec3>& cell) {
+            return projected_area(c.n, a, cell) / pp->projected_area();
+        });
+        t.check_mean = !c.heavy_tailed;
+        t.invert_tol = c.invert_tol;
+        run_sampler_check(t, seed++);
+    } else {
+        CHECK(L.pdf_parallel(c.x, c.n, normalize(c.c - c.x)) == 0);
+    }
+}
+
+// The four corners of a grid cell (i, j) of K × K over [0,1]², mapped by `at`.
+std::vector<Vec3> grid_cell(int i, int j, const std::function<Vec3(double, double)>& at) {
+    const double s0 = double(i) / K, s1 = double(i + 1) / K;
+    const double v0 = double(j) / K, v1 = double(j + 1) / K;
+    return {at(s0, v0), at(s1, v0), at(s1, v1), at(s0, v1)};
+}
+
+}  // namespace
 
 TEST_CASE("rectangle samplers", "[sampling]") {
     int seed = 1000;
     for (const Config& c : planar_configs()) {
         INFO("config " << c.name);
-        const RectLight L{c.c - c.U - c.V, c.U * 2, c.V * 2};
-        const Vec3 a = L.corner - c.x;
-        const double omega = L.solid_angle(c.x);
-        auto cell = [&](int i, int j) {
-            const double s0 = double(i) / K, s1 = double(i + 1) / K;
-            const double v0 = double(j) / K, v1 = double(j + 1) / K;
-            return std::vector<Vec3>{rect_offset(c, s0, v0), rect_offset(c, s1, v0),
-                                     rect_offset(c, s1, v1), rect_offset(c, s0, v1)};
+        PolygonUnderTest<RectLight, SphericalRect> p;
+        p.shape = "rect";
+        p.light = RectLight{c.c - c.U - c.V, c.U * 2, c.V * 2};
+        p.spherical = SphericalRect::make(c.x, p.light.corner, p.light.edge_u, p.light.edge_v);
+        p.first_vertex = p.light.corner;
+        p.cell = [&](int i, int j) {
+            return grid_cell(i, j, [&](double s, double v) { return rect_offset(c, s, v); });
         };
-        auto bins = [&](SamplerUnderTest& t) {
-            t.bin = [&](const Vec3& w) {
-                const auto h = L.intersect(c.x, w);
-                return h ? grid_bin(h->uv.x, h->uv.y) : -1;
-            };
-        };
-        {
-            const auto sr = SphericalRect::make(c.x, L.corner, L.edge_u, L.edge_v);
-            REQUIRE(sr);
-            SamplerUnderTest t;
-            t.name = "rect solid-angle";
-            t.sample = [&](double u1, double u2) { return L.sample_solid_angle(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_solid_angle(c.x, w); };
-            t.invert = [&](const Vec3& w) { return std::optional<Point2>(sr->invert(w)); };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(polygon_solid_angle(a, cell(i, j)) / omega);
-            t.measure = omega;
-            t.invert_tol = c.invert_tol;
-            run_sampler_check(t, seed++);
-        }
-        {
-            SamplerUnderTest t;
-            t.name = "rect area";
-            t.sample = [&](double u1, double u2) { return L.sample_area(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_area(c.x, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const auto h = L.intersect(c.x, w);
-                return h ? std::optional<Point2>(h->uv) : std::nullopt;
-            };
-            bins(t);
-            t.cell_prob.assign(K * K, 1.0 / (K * K));
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            run_sampler_check(t, seed++);
-        }
-        const auto pp = L.parallel(c.x, c.n);
-        INFO("parallel applicable " << bool(pp));
-        if (pp) {
-            SamplerUnderTest t;
-            t.name = "rect parallel";
-            t.sample = [&](double u1, double u2) { return L.sample_parallel(c.x, c.n, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_parallel(c.x, c.n, w); };
-            t.invert = [&](const Vec3& w) { return std::optional<Point2>(pp->invert(w)); };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(projected_area(c.n, a, cell(i, j)) / pp->projected_area());
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            t.invert_tol = c.invert_tol;
-            run_sampler_check(t, seed++);
-        } else {
-            CHECK(L.pdf_parallel(c.x, c.n, normalize(c.c - c.x)) == 0);
-        }
+        p.bin = [](const ShapeHit& h) { return grid_bin(h.uv.x, h.uv.y); };
+        p.invert_area = [](const ShapeHit& h) { return std::optional<Point2>(h.uv); };
+        p.area_cell_prob.assign(K * K, 1.0 / (K * K));
+        check_polygon_samplers(p, c, seed);
     }
 }
 
@@ -399,74 +456,29 @@ TEST_CASE("triangle samplers", "[sampling]") {
     int seed = 2000;
     for (const Config& c : planar_configs()) {
         INFO("config " << c.name);
-        const TriangleLight L{c.c - c.U - c.V, c.c + c.U - c.V, c.c + c.U * 0.3 + c.V};
-        const Vec3 a = L.p0 - c.x, e1 = c.U * 2, e2 = c.U * 1.3 + c.V * 2;
-        const double omega = L.solid_angle(c.x);
-        auto cell = [&](int i, int j) {
-            const double s0 = double(i) / K, s1 = double(i + 1) / K;
-            const double t0 = double(j) / K, t1 = double(j + 1) / K;
-            return std::vector<Vec3>{tri_offset(e1, e2, s0, t0), tri_offset(e1, e2, s1, t0),
-                                     tri_offset(e1, e2, s1, t1), tri_offset(e1, e2, s0, t1)};
+        PolygonUnderTest<TriangleLight, SphericalTriangle> p;
+        p.shape = "triangle";
+        p.light = TriangleLight{c.c - c.U - c.V, c.c + c.U - c.V, c.c + c.U * 0.3 + c.V};
+        const TriangleLight& L = p.light;
+        p.spherical = SphericalTriangle::make(c.x, L.p0, L.p1, L.p2);
+        REQUIRE(p.spherical);
+        CHECK(p.spherical->solid_angle() == Approx(L.solid_angle(c.x)).epsilon(1e-12));
+        p.first_vertex = L.p0;
+        const Vec3 e1 = c.U * 2, e2 = c.U * 1.3 + c.V * 2;
+        p.cell = [e1, e2](int i, int j) {
+            return grid_cell(i, j, [&](double s, double t) { return tri_offset(e1, e2, s, t); });
         };
-        auto bins = [&](SamplerUnderTest& t) {
-            t.bin = [&](const Vec3& w) {
-                const auto h = L.intersect(c.x, w);
-                if (!h) return -1;
-                const double s = h->uv.x + h->uv.y;
-                return grid_bin(s, s > 0 ? h->uv.y / s : 0.0);
-            };
+        p.bin = [](const ShapeHit& h) {
+            const double s = h.uv.x + h.uv.y;
+            return grid_bin(s, s > 0 ? h.uv.y / s : 0.0);
         };
-        {
-            const auto st = SphericalTriangle::make(c.x, L.p0, L.p1, L.p2);
-            REQUIRE(st);
-            CHECK(st->solid_angle() == Approx(omega).epsilon(1e-12));
-            SamplerUnderTest t;
-            t.name = "triangle solid-angle";
-            t.sample = [&](double u1, double u2) { return L.sample_solid_angle(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_solid_angle(c.x, w); };
-            t.invert = [&](const Vec3& w) { return std::optional<Point2>(st->invert(w)); };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(polygon_solid_angle(a, cell(i, j)) / omega);
-            t.measure = omega;
-            t.invert_tol = c.invert_tol;
-            run_sampler_check(t, seed++);
-        }
-        {
-            SamplerUnderTest t;
-            t.name = "triangle area";
-            t.sample = [&](double u1, double u2) { return L.sample_area(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_area(c.x, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const auto h = L.intersect(c.x, w);
-                return h ? std::optional<Point2>(invert_uniform_triangle(h->uv)) : std::nullopt;
-            };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back((std::pow(double(i + 1) / K, 2) - std::pow(double(i) / K, 2)) / K);
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            run_sampler_check(t, seed++);
-        }
-        const auto pp = L.parallel(c.x, c.n);
-        INFO("parallel applicable " << bool(pp));
-        if (pp) {
-            SamplerUnderTest t;
-            t.name = "triangle parallel";
-            t.sample = [&](double u1, double u2) { return L.sample_parallel(c.x, c.n, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_parallel(c.x, c.n, w); };
-            t.invert = [&](const Vec3& w) { return std::optional<Point2>(pp->invert(w)); };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(projected_area(c.n, a, cell(i, j)) / pp->projected_area());
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            t.invert_tol = c.invert_tol;
-            run_sampler_check(t, seed++);
-        }
+        p.invert_area = [](const ShapeHit& h) {
+            return std::optional<Point2>(invert_uniform_triangle(h.uv));
+        };
+        for (int i = 0; i < K; ++i)
+            for (int j = 0; j < K; ++j)
+                p.area_cell_prob.push_back((std::pow(double(i + 1) / K, 2) - std::pow(double(i) / K, 2)) / K);
+        check_polygon_samplers(p, c, seed);
     }
 }
 
@@ -476,51 +488,8 @@ TEST_CASE("ellipse samplers", "[sampling]") {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
         const double omega = ellipse_solid_angle(c.c - c.x, c.U, c.V);
-        auto bins = [&](SamplerUnderTest& t) {
-            t.bin = [&](const Vec3& w) {
-                const auto h = L.intersect(c.x, w);
-                return h ? ellipse_bin(h->uv) : -1;
-            };
-        };
-        {
-            SamplerUnderTest t;
-            t.name = "ellipse area";
-            t.sample = [&](double u1, double u2) { return L.sample_area(c.x, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_area(c.x, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const auto h = L.intersect(c.x, w);
-                if (!h || h->uv.x * h->uv.x + h->uv.y * h->uv.y < 1e-6) return std::nullopt;
-                return invert_uniform_disk(h->uv);
-            };
-            bins(t);
-            t.cell_prob.assign(K * K, 1.0 / (K * K));
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            run_sampler_check(t, seed++);
-        }
-        const auto pe = L.parallel(c.x, c.n);
-        INFO("parallel applicable " << bool(pe));
-        if (pe) {
-            SamplerUnderTest t;
-            t.name = "ellipse parallel";
-            t.sample = [&](double u1, double u2) { return L.sample_parallel(c.x, c.n, u1, u2); };
-            t.pdf = [&](const Vec3& w) { return L.pdf_parallel(c.x, c.n, w); };
-            t.invert = [&](const Vec3& w) -> std::optional<Point2> {
-                const Point2 u = pe->invert(w);
-                if (u.x < 1e-6) return std::nullopt;  // polar map: azimuth undefined at 0
-                return u;
-            };
-            bins(t);
-            for (int i = 0; i < K; ++i)
-                for (int j = 0; j < K; ++j)
-                    t.cell_prob.push_back(projected_area(c.n, c.c - c.x, ellipse_cell(c.U, c.V, i, j)) /
-                                          pe->projected_area());
-            t.prob_sum_tol = 1e-4;
-            t.measure = omega;
-            t.check_mean = !c.heavy_tailed;
-            t.invert_tol = c.invert_tol;
-            run_sampler_check(t, seed++);
-        }
+        check_disk_samplers("ellipse", L, L, c.x, c.n, omega,
+                            DiskAllowances{!c.heavy_tailed, c.invert_tol}, seed);
     }
 }
 
