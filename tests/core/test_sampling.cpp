@@ -109,9 +109,18 @@ int grid_bin(double s, double v) {
     return i * K + j;
 }
 
+// The cell a hit on a rect (uv: fractions along the edges) falls in.
+int rect_bin(const ShapeHit& h) { return grid_bin(h.uv.x, h.uv.y); }
+
 // Triangle parametrisation p0 + s(1−t)(p1−p0) + s t (p2−p0): cells are planar quads.
 Vec3 tri_offset(const Vec3& e1, const Vec3& e2, double s, double t) {
     return e1 * (s * (1 - t)) + e2 * (s * t);
+}
+
+// The cell a hit on a triangle (uv: barycentrics of p1, p2) falls in: s = b1 + b2.
+int triangle_bin(const ShapeHit& h) {
+    const double s = h.uv.x + h.uv.y;
+    return grid_bin(s, s > 0 ? h.uv.y / s : 0.0);
 }
 
 // Ellipse cells: K rings equal in ρ², K sectors.
@@ -445,7 +454,7 @@ TEST_CASE("rectangle samplers", "[sampling]") {
         p.cell = [&](int i, int j) {
             return grid_cell(i, j, [&](double s, double v) { return rect_offset(c, s, v); });
         };
-        p.bin = [](const ShapeHit& h) { return grid_bin(h.uv.x, h.uv.y); };
+        p.bin = rect_bin;
         p.invert_area = [](const ShapeHit& h) { return std::optional<Point2>(h.uv); };
         p.area_cell_prob.assign(K * K, 1.0 / (K * K));
         check_polygon_samplers(p, c, seed);
@@ -468,10 +477,7 @@ TEST_CASE("triangle samplers", "[sampling]") {
         p.cell = [e1, e2](int i, int j) {
             return grid_cell(i, j, [&](double s, double t) { return tri_offset(e1, e2, s, t); });
         };
-        p.bin = [](const ShapeHit& h) {
-            const double s = h.uv.x + h.uv.y;
-            return grid_bin(s, s > 0 ? h.uv.y / s : 0.0);
-        };
+        p.bin = triangle_bin;
         p.invert_area = [](const ShapeHit& h) {
             return std::optional<Point2>(invert_uniform_triangle(h.uv));
         };
@@ -622,19 +628,23 @@ TEST_CASE("clipped disk: uniform over the unit disk cut by a box", "[sampling]")
 // Projected solid angle: cells weighted by their own ∫cos θ dω (Lambert's formula
 // clipped at the horizon, SPEC §5), the pdf checked against cos θ/Ωp, and the estimate
 // cos θ/pdf of a Lambert receiver checked to be the same for every draw.
-void run_projected(const std::string& name, const Config& c,
-                   const std::function<std::optional<LightSample>(double, double)>& sample,
-                   const std::function<double(const Vec3&)>& pdf,
-                   const std::function<int(const Vec3&)>& bin,
+template <class Light>
+void run_projected(const std::string& name, const Config& c, const Light& L,
+                   int (*bin)(const ShapeHit&),
                    const std::vector<std::vector<Vec3>>& cells,  // world vertices, per bin
-                   const std::vector<Vec3>& light, double omega, bool wholly_above,
-                   uint64_t seed) {
+                   const std::vector<Vec3>& light, uint64_t seed) {
     const double omega_p = polygon_irradiance(c.x, c.n, light);
+    const double omega = L.solid_angle(c.x);
+    const bool wholly_above = bool(L.parallel(c.x, c.n));
+    const auto sample = [&](double u1, double u2) { return L.sample_projected(c.x, c.n, u1, u2); };
     SamplerUnderTest t;
     t.name = name;
     t.sample = sample;
-    t.pdf = pdf;
-    t.bin = bin;
+    t.pdf = [&](const Vec3& w) { return L.pdf_projected(c.x, c.n, w); };
+    t.bin = [&](const Vec3& w) {
+        const auto h = L.intersect(c.x, w);
+        return h ? bin(*h) : -1;
+    };
     for (const auto& cell : cells) t.cell_prob.push_back(polygon_irradiance(c.x, c.n, cell) / omega_p);
     t.prob_sum_tol = 1e-6;
     t.measure = omega;
@@ -669,23 +679,11 @@ TEST_CASE("projected-solid-angle samplers (rect, triangle)", "[sampling][project
             if (polygon_irradiance(c.x, c.n, light) > 0 && L.projected(c.x, c.n)) {
                 std::vector<std::vector<Vec3>> cells;
                 for (int i = 0; i < K; ++i)
-                    for (int j = 0; j < K; ++j) {
-                        const double s0 = double(i) / K, s1 = double(i + 1) / K;
-                        const double v0 = double(j) / K, v1 = double(j + 1) / K;
-                        std::vector<Vec3> cell;
-                        for (auto [s, v] : {std::pair{s0, v0}, {s1, v0}, {s1, v1}, {s0, v1}})
-                            cell.push_back(L.corner + L.edge_u * s + L.edge_v * v);
-                        cells.push_back(cell);
-                    }
-                run_projected(
-                    "rect projected-solid-angle", c,
-                    [&](double u1, double u2) { return L.sample_projected(c.x, c.n, u1, u2); },
-                    [&](const Vec3& w) { return L.pdf_projected(c.x, c.n, w); },
-                    [&](const Vec3& w) {
-                        const auto h = L.intersect(c.x, w);
-                        return h ? grid_bin(h->uv.x, h->uv.y) : -1;
-                    },
-                    cells, light, L.solid_angle(c.x), bool(L.parallel(c.x, c.n)), seed++);
+                    for (int j = 0; j < K; ++j)
+                        cells.push_back(grid_cell(i, j, [&](double s, double v) {
+                            return L.corner + L.edge_u * s + L.edge_v * v;
+                        }));
+                run_projected("rect projected-solid-angle", c, L, rect_bin, cells, light, seed++);
             }
         }
         {
@@ -706,17 +704,8 @@ TEST_CASE("projected-solid-angle samplers (rect, triangle)", "[sampling][project
                         if (i > 0) cell.push_back(L.p0 + tri_offset(e1, e2, s0, t1));
                         cells.push_back(cell);
                     }
-                run_projected(
-                    "triangle projected-solid-angle", c,
-                    [&](double u1, double u2) { return L.sample_projected(c.x, c.n, u1, u2); },
-                    [&](const Vec3& w) { return L.pdf_projected(c.x, c.n, w); },
-                    [&](const Vec3& w) {
-                        const auto h = L.intersect(c.x, w);
-                        if (!h) return -1;
-                        const double s = h->uv.x + h->uv.y;
-                        return grid_bin(s, s > 0 ? h->uv.y / s : 0.0);
-                    },
-                    cells, light, L.solid_angle(c.x), bool(L.parallel(c.x, c.n)), seed++);
+                run_projected("triangle projected-solid-angle", c, L, triangle_bin, cells,
+                              light, seed++);
             }
         }
     }
