@@ -71,12 +71,32 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
 
 void init_scene(py::module_& m) {
     const double pi = 3.14159265358979323846;
-    py::class_<Scene>(m, "Scene", R"doc(Meshes and lights for direct lighting (SPEC §3–§4).
+    py::class_<Scene> scene(m, "Scene", R"doc(Meshes and lights for direct lighting (SPEC §3–§4).
 
 Add meshes and lights, commit(), then light it with omis.direct_lighting.
 Units: metres; radiance W/(m² sr), intensity W/sr, irradiance W/m² (RGB: three
-numbers, or one for grey); angles in radians. Every add returns an integer id.)doc")
-        .def(py::init<>())
+numbers, or one for grey); angles in radians. Every add returns an integer id.)doc");
+    // Rect and ellipse lights take the same arguments: a point, two perpendicular
+    // vectors, radiance, sides and Blender's spread.
+    struct PlanarLight {
+        const char* name;
+        decltype(&Scene::add_rect_light) add;
+        std::array<const char*, 3> frame;
+        const char* doc;
+    };
+    for (const PlanarLight& l :
+         {PlanarLight{"add_rect_light", &Scene::add_rect_light, {"corner", "edge_u", "edge_v"},
+                      "Rectangle corner + [0,1]·edge_u + [0,1]·edge_v (perpendicular edges); "
+                      "one-sided lights emit toward cross(edge_u, edge_v). Returns the light id."},
+          PlanarLight{"add_ellipse_light", &Scene::add_ellipse_light,
+                      {"center", "axis_u", "axis_v"},
+                      "Ellipse center + a·axis_u + b·axis_v, a² + b² ≤ 1 (perpendicular "
+                      "semi-axes); one-sided lights emit toward cross(axis_u, axis_v). Returns "
+                      "the light id."}})
+        scene.def(l.name, l.add, py::arg(l.frame[0]), py::arg(l.frame[1]), py::arg(l.frame[2]),
+                  py::arg("radiance"), py::arg("two_sided") = false, py::arg("spread") = pi,
+                  l.doc);
+    scene.def(py::init<>())
         .def("add_mesh", &Scene::add_mesh, py::arg("vertices"), py::arg("triangles"),
              py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
              py::arg("emission") = py::none(),
@@ -86,16 +106,6 @@ vertices: (V, 3) float32/float64; triangles: (T, 3) integer vertex indices,
 counter-clockwise = front; normals: optional (3T, 3) per-corner shading
 normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
 (the mesh then emits from both sides). Returns the mesh id.)doc")
-        .def("add_rect_light", &Scene::add_rect_light, py::arg("corner"), py::arg("edge_u"),
-             py::arg("edge_v"), py::arg("radiance"), py::arg("two_sided") = false,
-             py::arg("spread") = pi,
-             "Rectangle corner + [0,1]·edge_u + [0,1]·edge_v (perpendicular edges); "
-             "one-sided lights emit toward cross(edge_u, edge_v). Returns the light id.")
-        .def("add_ellipse_light", &Scene::add_ellipse_light, py::arg("center"),
-             py::arg("axis_u"), py::arg("axis_v"), py::arg("radiance"),
-             py::arg("two_sided") = false, py::arg("spread") = pi,
-             "Ellipse center + a·axis_u + b·axis_v, a² + b² ≤ 1 (perpendicular semi-axes); "
-             "one-sided lights emit toward cross(axis_u, axis_v). Returns the light id.")
         .def("add_disk_light", &Scene::add_disk_light, py::arg("center"), py::arg("normal"),
              py::arg("radius"), py::arg("radiance"), py::arg("two_sided") = false,
              py::arg("spread") = pi,

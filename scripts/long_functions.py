@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Lists C++ function bodies longer than a limit (default 100 lines).
 
-Usage: python3 scripts/long_functions.py [--limit N] [paths...]   (default: core/)
+Usage: python3 scripts/long_functions.py [--limit N] [--check] [paths...]   (default: core/)
+With --check the exit status is 1 when any function is longer than the limit.
 
 A text scan, not a parser: comments, strings and character literals are blanked,
 then every brace block whose opening follows a closing parenthesis (optionally
@@ -99,6 +100,7 @@ def long_functions(path, limit):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--limit", type=int, default=100)
+    ap.add_argument("--check", action="store_true", help="exit 1 if any function is too long")
     ap.add_argument("paths", nargs="*", default=["core"])
     args = ap.parse_args()
     rows = []
@@ -111,7 +113,8 @@ def main():
     for lines, where, name in sorted(rows, reverse=True):
         print(f"{lines:5d}  {where}  {name}")
     print(f"{len(rows)} function(s) longer than {args.limit} lines", file=sys.stderr)
+    return 1 if args.check and rows else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

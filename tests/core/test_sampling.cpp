@@ -81,8 +81,6 @@ std::vector<Config> planar_configs() {
 
 constexpr int K = 8;  // cells per parameter
 
-Vec3 rect_offset(const Config& c, double s, double v) { return c.U * (2 * s) + c.V * (2 * v); }
-
 // Projected area (onto the unit-height plane along n) of a polygon given by offsets
 // from the point x + a; relative coordinates keep tiny far cells exact enough.
 double projected_area(const Vec3& n, const Vec3& a, const std::vector<Vec3>& off) {
@@ -442,49 +440,58 @@ std::vector<Vec3> grid_cell(int i, int j, const std::function<Vec3(double, doubl
 
 }  // namespace
 
-TEST_CASE("rectangle samplers", "[sampling]") {
-    int seed = 1000;
-    for (const Config& c : planar_configs()) {
-        INFO("config " << c.name);
-        PolygonUnderTest<RectLight, SphericalRect> p;
-        p.shape = "rect";
-        p.light = RectLight{c.c - c.U - c.V, c.U * 2, c.V * 2};
-        p.spherical = SphericalRect::make(c.x, p.light.corner, p.light.edge_u, p.light.edge_v);
-        p.first_vertex = p.light.corner;
-        p.cell = [&](int i, int j) {
-            return grid_cell(i, j, [&](double s, double v) { return rect_offset(c, s, v); });
-        };
-        p.bin = rect_bin;
-        p.invert_area = [](const ShapeHit& h) { return std::optional<Point2>(h.uv); };
-        p.area_cell_prob.assign(K * K, 1.0 / (K * K));
-        check_polygon_samplers(p, c, seed);
-    }
+namespace {
+
+// The rect of a configuration: corner c − U − V, edges 2U and 2V.
+PolygonUnderTest<RectLight, SphericalRect> rect_under_test(const Config& c) {
+    PolygonUnderTest<RectLight, SphericalRect> p;
+    p.shape = "rect";
+    p.light = RectLight{c.c - c.U - c.V, c.U * 2, c.V * 2};
+    p.spherical = SphericalRect::make(c.x, p.light.corner, p.light.edge_u, p.light.edge_v);
+    p.first_vertex = p.light.corner;
+    p.cell = [U = c.U, V = c.V](int i, int j) {
+        return grid_cell(i, j, [&](double s, double v) { return U * (2 * s) + V * (2 * v); });
+    };
+    p.bin = rect_bin;
+    p.invert_area = [](const ShapeHit& h) { return std::optional<Point2>(h.uv); };
+    p.area_cell_prob.assign(K * K, 1.0 / (K * K));
+    return p;
 }
 
-TEST_CASE("triangle samplers", "[sampling]") {
-    int seed = 2000;
+// A triangle in the configuration's plane, not symmetric about its centre.
+PolygonUnderTest<TriangleLight, SphericalTriangle> triangle_under_test(const Config& c) {
+    PolygonUnderTest<TriangleLight, SphericalTriangle> p;
+    p.shape = "triangle";
+    const TriangleLight L{c.c - c.U - c.V, c.c + c.U - c.V, c.c + c.U * 0.3 + c.V};
+    p.light = L;
+    p.spherical = SphericalTriangle::make(c.x, L.p0, L.p1, L.p2);
+    p.first_vertex = L.p0;
+    p.cell = [e1 = L.p1 - L.p0, e2 = L.p2 - L.p0](int i, int j) {
+        return grid_cell(i, j, [&](double s, double t) { return tri_offset(e1, e2, s, t); });
+    };
+    p.bin = triangle_bin;
+    p.invert_area = [](const ShapeHit& h) {
+        return std::optional<Point2>(invert_uniform_triangle(h.uv));
+    };
+    // Uniform in area: cell (i, j) holds ((i+1)² − i²)/K² of it (s² is uniform).
+    for (int i = 0; i < K; ++i)
+        for (int j = 0; j < K; ++j)
+            p.area_cell_prob.push_back((std::pow(double(i + 1) / K, 2) - std::pow(double(i) / K, 2)) / K);
+    return p;
+}
+
+}  // namespace
+
+TEST_CASE("rectangle and triangle samplers", "[sampling]") {
+    int rect_seed = 1000, triangle_seed = 2000;
     for (const Config& c : planar_configs()) {
         INFO("config " << c.name);
-        PolygonUnderTest<TriangleLight, SphericalTriangle> p;
-        p.shape = "triangle";
-        p.light = TriangleLight{c.c - c.U - c.V, c.c + c.U - c.V, c.c + c.U * 0.3 + c.V};
-        const TriangleLight& L = p.light;
-        p.spherical = SphericalTriangle::make(c.x, L.p0, L.p1, L.p2);
-        REQUIRE(p.spherical);
-        CHECK(p.spherical->solid_angle() == Approx(L.solid_angle(c.x)).epsilon(1e-12));
-        p.first_vertex = L.p0;
-        const Vec3 e1 = c.U * 2, e2 = c.U * 1.3 + c.V * 2;
-        p.cell = [e1, e2](int i, int j) {
-            return grid_cell(i, j, [&](double s, double t) { return tri_offset(e1, e2, s, t); });
-        };
-        p.bin = triangle_bin;
-        p.invert_area = [](const ShapeHit& h) {
-            return std::optional<Point2>(invert_uniform_triangle(h.uv));
-        };
-        for (int i = 0; i < K; ++i)
-            for (int j = 0; j < K; ++j)
-                p.area_cell_prob.push_back((std::pow(double(i + 1) / K, 2) - std::pow(double(i) / K, 2)) / K);
-        check_polygon_samplers(p, c, seed);
+        check_polygon_samplers(rect_under_test(c), c, rect_seed);
+        const auto triangle = triangle_under_test(c);
+        REQUIRE(triangle.spherical);
+        CHECK(triangle.spherical->solid_angle() ==
+              Approx(triangle.light.solid_angle(c.x)).epsilon(1e-12));
+        check_polygon_samplers(triangle, c, triangle_seed);
     }
 }
 
