@@ -206,10 +206,9 @@ OMIS_API void omisSetDirectLightingString(OMISDirectLighting lighting, const cha
 OMIS_API void omisSetDirectLightingCounts(OMISDirectLighting lighting, const int* counts,
                                           int numCounts) {
     guarded_void([&] {
-        std::vector<int> copy = counts_argument(counts, numCounts);
         auto* l = checked(lighting, "lighting");
         l->require_uncommitted("counts");
-        l->counts = std::move(copy);
+        l->counts = counts_argument(counts, numCounts);
     });
 }
 
