@@ -44,6 +44,7 @@
 #include "render/direct_lighting.h"
 #include "sampling/irradiance.h"
 #include "scene/ray_offset.h"
+#include "support/lighting_settings.h"
 
 using namespace omis;
 using Clock = std::chrono::steady_clock;
@@ -273,13 +274,7 @@ struct Config {
         return techniques.size() == 1 ? "alone" : strategy_name(strategy);
     }
     DirectLightingSettings settings(std::uint64_t seed) const {
-        DirectLightingSettings s;
-        for (const auto& t : techniques) s.techniques.push_back(*parse_technique(t));
-        s.samples = samples;
-        s.rounds = rounds;
-        s.strategy = strategy;
-        s.seed = seed;
-        return s;
+        return testing::lighting_settings(techniques, samples, rounds, strategy, seed);
     }
 };
 

@@ -146,20 +146,6 @@ private:
     int width_ = 0, height_ = 0;
 };
 
-std::uint64_t seed_value(const py::handle& seed_in) {
-    py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
-    if (!index) {
-        PyErr_Clear();
-        bad("seed", "expected a non-negative integer");
-    }
-    const std::uint64_t seed = PyLong_AsUnsignedLongLong(index.ptr());
-    if (PyErr_Occurred()) {
-        PyErr_Clear();
-        bad("seed", "expected an integer in [0, 2**64)");
-    }
-    return seed;
-}
-
 struct BakeOptions {
     py::object techniques, counts;
     long long samples;

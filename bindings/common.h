@@ -86,6 +86,21 @@ inline double number_arg(const py::handle& obj, const char* name) {
     return v;
 }
 
+// A seed: any integer in [0, 2**64) (numpy integers too).
+inline std::uint64_t seed_value(const py::handle& seed_in) {
+    py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
+    if (!index) {
+        PyErr_Clear();
+        bad("seed", "expected a non-negative integer");
+    }
+    const std::uint64_t seed = PyLong_AsUnsignedLongLong(index.ptr());
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        bad("seed", "expected an integer in [0, 2**64)");
+    }
+    return seed;
+}
+
 // A string for the C ABI, which would stop at an embedded NUL ('a\0.exr' → 'a').
 inline const char* c_string(const std::string& text, const char* name) {
     if (text.find('\0') != std::string::npos) bad(name, "contains a NUL byte");

@@ -5,10 +5,43 @@
 namespace omis_py {
 namespace {
 
+// A committed OMISDirectLighting job for these settings; errors name the
+// Python argument.
+omis::capi::DirectLightingRef lighting_job(const Scene& scene, const TechniqueArgs& t, int rounds,
+                                           const std::string& strategy,
+                                           const py::handle& seed, double beta, double cutoff) {
+    omis::capi::DirectLightingRef job(omisNewDirectLighting(scene.get()));
+    if (!job) raise_pending_error();
+    OMISDirectLighting l = job.get();
+    if (!t.names.empty()) {
+        for (std::size_t k = 0; k < t.samples.size(); ++k)
+            if (t.samples[k] < 0) bad("samples", "entry " + std::to_string(k) + " is negative");
+        omisSetDirectLightingString(l, "techniques", t.names.c_str());
+        omisSetDirectLightingCounts(l, t.samples.data(), int(t.samples.size()));
+    }
+    omisSetDirectLightingInt(l, "rounds", rounds);
+    omisSetDirectLightingString(l, "strategy", c_string(strategy, "strategy"));
+    omisSetDirectLightingInt(l, "seed", std::int64_t(seed_value(seed)));
+    omisSetDirectLightingFloat(l, "beta", beta);
+    omisSetDirectLightingFloat(l, "cutoff", cutoff);
+    raise_if_pending();  // the first setting refused, named
+    omisCommitDirectLighting(l);
+    raise_if_pending();
+    return job;
+}
+
+py::dict stats_dict(const OMISDirectLightingStats& stats, const std::string& plan) {
+    using namespace pybind11::literals;
+    return py::dict("points"_a = stats.points, "samples"_a = stats.samples,
+                    "rays_traced"_a = stats.raysTraced, "mis_systems"_a = stats.misSystems,
+                    "pdf_evaluations"_a = stats.pdfEvaluations, "seconds"_a = stats.seconds,
+                    "plan"_a = plan);
+}
+
 py::object direct_lighting(const Scene& scene, const py::handle& points_in,
                            const py::handle& normals_in, const py::handle& techniques,
-                           const py::handle& samples, int rounds, const std::string& strategy_name,
-                           const py::handle& seed_in, double beta, double cutoff,
+                           const py::handle& samples, int rounds, const std::string& strategy,
+                           const py::handle& seed, double beta, double cutoff,
                            const py::object& progress, bool return_stats) {
     auto points = as_float_array(points_in, "points");
     auto normals = as_float_array(normals_in, "normals");
@@ -19,57 +52,51 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
         bad("normals", "expected shape (" + std::to_string(P) + ", 3) like points, got " +
                            shape_of(normals));
     const TechniqueArgs t = technique_args(techniques, samples);
-    OMISStrategy strategy;
-    if (!omisParseStrategy(c_string(strategy_name, "strategy"), &strategy))
-        bad("strategy", "unknown strategy '" + strategy_name +
-                            "' (balance, power, maximum, cutoff, optimal-direct, "
-                            "optimal-progressive)");
-    std::uint64_t seed;
-    {
-        py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(seed_in.ptr()));
-        if (!index) {
-            PyErr_Clear();
-            bad("seed", "expected a non-negative integer");
-        }
-        seed = PyLong_AsUnsignedLongLong(index.ptr());
-        if (PyErr_Occurred()) {
-            PyErr_Clear();
-            bad("seed", "expected an integer in [0, 2**64)");
-        }
-    }
     if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
         bad("progress", "expected a callable taking the fraction done");
+    const auto job = lighting_job(scene, t, rounds, strategy, seed, beta, cutoff);
 
     py::array_t<double> value({P, py::ssize_t(3)}), variance({P, py::ssize_t(3)});
     OMISDirectLightingStats stats{};
     run_interruptible("direct_lighting", progress, [&](NativeRun& run) {
-        return omisDirectLighting(scene.get(), points.data(), normals.data(), size_t(P),
-                                  t.names.c_str(), t.samples_ptr(), rounds, strategy, beta,
-                                  cutoff, seed, value.mutable_data(), variance.mutable_data(),
-                                  &stats, on_progress, &run);
+        omisSetDirectLightingProgressFunction(job.get(), on_progress, &run);
+        return omisExecuteDirectLighting(job.get(), points.data(), normals.data(), size_t(P),
+                                         value.mutable_data(), variance.mutable_data(), &stats);
     });
     if (!return_stats) return py::make_tuple(value, variance);
-    py::dict d;
-    d["points"] = stats.points;
-    d["samples"] = stats.samples;
-    d["rays_traced"] = stats.raysTraced;
-    d["mis_systems"] = stats.misSystems;
-    d["pdf_evaluations"] = stats.pdfEvaluations;
-    d["seconds"] = stats.seconds;
-    d["plan"] = plan_text(scene, t);
-    return py::make_tuple(value, variance, d);
+    return py::make_tuple(value, variance, stats_dict(stats, plan_text(scene, t)));
 }
 
 }  // namespace
 
 void init_scene(py::module_& m) {
     const double pi = 3.14159265358979323846;
-    py::class_<Scene>(m, "Scene", R"doc(Meshes and lights for direct lighting (SPEC §3–§4).
+    py::class_<Scene> scene(m, "Scene", R"doc(Meshes and lights for direct lighting (SPEC §3–§4).
 
 Add meshes and lights, commit(), then light it with omis.direct_lighting.
 Units: metres; radiance W/(m² sr), intensity W/sr, irradiance W/m² (RGB: three
-numbers, or one for grey); angles in radians. Every add returns an integer id.)doc")
-        .def(py::init<>())
+numbers, or one for grey); angles in radians. Every add returns an integer id.)doc");
+    // Rect and ellipse lights take the same arguments: a point, two perpendicular
+    // vectors, radiance, sides and Blender's spread.
+    struct PlanarLight {
+        const char* name;
+        decltype(&Scene::add_rect_light) add;
+        std::array<const char*, 3> frame;
+        const char* doc;
+    };
+    for (const PlanarLight& l :
+         {PlanarLight{"add_rect_light", &Scene::add_rect_light, {"corner", "edge_u", "edge_v"},
+                      "Rectangle corner + [0,1]·edge_u + [0,1]·edge_v (perpendicular edges); "
+                      "one-sided lights emit toward cross(edge_u, edge_v). Returns the light id."},
+          PlanarLight{"add_ellipse_light", &Scene::add_ellipse_light,
+                      {"center", "axis_u", "axis_v"},
+                      "Ellipse center + a·axis_u + b·axis_v, a² + b² ≤ 1 (perpendicular "
+                      "semi-axes); one-sided lights emit toward cross(axis_u, axis_v). Returns "
+                      "the light id."}})
+        scene.def(l.name, l.add, py::arg(l.frame[0]), py::arg(l.frame[1]), py::arg(l.frame[2]),
+                  py::arg("radiance"), py::arg("two_sided") = false, py::arg("spread") = pi,
+                  l.doc);
+    scene.def(py::init<>())
         .def("add_mesh", &Scene::add_mesh, py::arg("vertices"), py::arg("triangles"),
              py::arg("normals") = py::none(), py::arg("uvs") = py::none(),
              py::arg("emission") = py::none(),
@@ -79,16 +106,6 @@ vertices: (V, 3) float32/float64; triangles: (T, 3) integer vertex indices,
 counter-clockwise = front; normals: optional (3T, 3) per-corner shading
 normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
 (the mesh then emits from both sides). Returns the mesh id.)doc")
-        .def("add_rect_light", &Scene::add_rect_light, py::arg("corner"), py::arg("edge_u"),
-             py::arg("edge_v"), py::arg("radiance"), py::arg("two_sided") = false,
-             py::arg("spread") = pi,
-             "Rectangle corner + [0,1]·edge_u + [0,1]·edge_v (perpendicular edges); "
-             "one-sided lights emit toward cross(edge_u, edge_v). Returns the light id.")
-        .def("add_ellipse_light", &Scene::add_ellipse_light, py::arg("center"),
-             py::arg("axis_u"), py::arg("axis_v"), py::arg("radiance"),
-             py::arg("two_sided") = false, py::arg("spread") = pi,
-             "Ellipse center + a·axis_u + b·axis_v, a² + b² ≤ 1 (perpendicular semi-axes); "
-             "one-sided lights emit toward cross(axis_u, axis_v). Returns the light id.")
         .def("add_disk_light", &Scene::add_disk_light, py::arg("center"), py::arg("normal"),
              py::arg("radius"), py::arg("radiance"), py::arg("two_sided") = false,
              py::arg("spread") = pi,

@@ -106,21 +106,15 @@ public:
     unsigned int add_rect_light(const py::handle& corner, const py::handle& edge_u,
                                 const py::handle& edge_v, const py::handle& radiance,
                                 bool two_sided, double spread) {
-        const Triple c = triple(corner, "corner"), u = triple(edge_u, "edge_u"),
-                     v = triple(edge_v, "edge_v"), L = triple(radiance, "radiance", true);
-        if (cross_length(u, v) == 0) bad("edge_u", "edge_u and edge_v span zero area");
-        return checked_id(omisAddRectLight(get(), c.data(), u.data(), v.data(), L.data(),
-                                                two_sided, finite(spread, "spread")));
+        return add_planar(omisAddRectLight, {"corner", "edge_u", "edge_v"},
+                          {corner, edge_u, edge_v}, radiance, two_sided, spread);
     }
 
     unsigned int add_ellipse_light(const py::handle& center, const py::handle& axis_u,
                                    const py::handle& axis_v, const py::handle& radiance,
                                    bool two_sided, double spread) {
-        const Triple c = triple(center, "center"), u = triple(axis_u, "axis_u"),
-                     v = triple(axis_v, "axis_v"), L = triple(radiance, "radiance", true);
-        if (cross_length(u, v) == 0) bad("axis_u", "axis_u and axis_v span zero area");
-        return checked_id(omisAddEllipseLight(get(), c.data(), u.data(), v.data(), L.data(),
-                                                   two_sided, finite(spread, "spread")));
+        return add_planar(omisAddEllipseLight, {"center", "axis_u", "axis_v"},
+                          {center, axis_u, axis_v}, radiance, two_sided, spread);
     }
 
     unsigned int add_disk_light(const py::handle& center, const py::handle& normal, double radius,
@@ -223,6 +217,21 @@ public:
     }
 
 private:
+    // Rect and ellipse lights: a point and two perpendicular vectors, checked under
+    // the Python argument names.
+    using PlanarAdd = unsigned int (*)(OMISScene, const double*, const double*, const double*,
+                                       const double*, bool, double);
+    unsigned int add_planar(PlanarAdd add, const std::array<const char*, 3>& names,
+                            const std::array<py::handle, 3>& frame, const py::handle& radiance,
+                            bool two_sided, double spread) {
+        const Triple o = triple(frame[0], names[0]), u = triple(frame[1], names[1]),
+                     v = triple(frame[2], names[2]), L = triple(radiance, "radiance", true);
+        if (cross_length(u, v) == 0)
+            bad(names[1], std::string(names[1]) + " and " + names[2] + " span zero area");
+        return checked_id(add(get(), o.data(), u.data(), v.data(), L.data(), two_sided,
+                              finite(spread, "spread")));
+    }
+
     static double cross_length(const Triple& u, const Triple& v) {
         const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
                      z = u[0] * v[1] - u[1] * v[0];

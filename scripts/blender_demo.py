@@ -28,20 +28,12 @@ import omis_bake
 from omis_bake.job import BakeJob
 from omis_bake.settings import settings_from
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "tests", "blender"))
 from demo_bake import noise_comparison  # noqa: E402  (one plot for both demos)
-
-
-def script_args():
-    """The script's own arguments: after Blender's `--` (blender_run.sh adds it;
-    a second `--` given by hand is tolerated)."""
-    argv = sys.argv
-    rest = argv[argv.index("--") + 1:] if "--" in argv else []
-    return rest[1:] if rest[:1] == ["--"] else rest
-
-
-def log(text=""):
-    print(text, flush=True)
+# Argument, log and image-material helpers shared with the Blender tests.
+from omis_test_utils import args as script_args, image_material, log, make_image  # noqa: E402
 
 
 # -- the scene -----------------------------------------------------------------
@@ -120,14 +112,8 @@ def build_demo(size):
     d = omis.demo
     floor_v, floor_t, floor_uv = d.grid(6.0, 6.0, 12)
     floor = mesh_object("Floor", floor_v, floor_t, floor_uv)
-    image = bpy.data.images.new("FloorLightmap", size, size, float_buffer=True, alpha=True)
-    image.generated_color = (0.0, 0.0, 0.0, 1.0)
-    mat = bpy.data.materials.new("FloorMat")
-    mat.use_nodes = True
-    node = mat.node_tree.nodes.new("ShaderNodeTexImage")
-    node.image = image
-    mat.node_tree.nodes.active = node
-    floor.data.materials.append(mat)
+    image = make_image("FloorLightmap", size)
+    floor.data.materials.append(image_material("FloorMat", image))
 
     room_h = 2.6
     boxes = [("WallN", (0, 3.05, room_h / 2), (6.2, 0.1, room_h)),

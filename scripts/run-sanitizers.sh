@@ -22,7 +22,8 @@ export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1"
 export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers.supp:print_suppressions=0"
 
 cmake --build "$build" -j"$(nproc)" --target omis_core_tests omis_capi_estimator_tests \
-    omis_capi_scene_tests omis_capi_bake_tests omis_capi_receiver_tests omis_capi_inputs_tests \
+    omis_capi_scene_tests omis_capi_lighting_tests omis_capi_bake_tests omis_capi_receiver_tests \
+    omis_capi_inputs_tests \
     omis_bake_floor
 cd "$build"
 # Excluded: the one test that times a budget to within 10 %; instrumented code

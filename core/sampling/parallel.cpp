@@ -15,16 +15,16 @@ Point2 solve2(const Point2& e1, const Point2& e2, const Point2& off) {
     return {cross2(off, e2) / det, cross2(e1, off) / det};
 }
 
-double pdf_cos3(const Vec3& w, const Vec3& n, double area) {
-    const double c = dot(w, n);
-    return c > 0 ? 1.0 / (area * c * c * c) : 0.0;
-}
-
 Vec3 unproject(const Frame& f, double qx, double qy) {
     return normalize(f.to_world({qx, qy, 1.0}));
 }
 
 }  // namespace
+
+double ParallelProjection::pdf(const Vec3& w) const {
+    const double c = dot(w, frame_.n);
+    return c > 0 ? 1.0 / (area_ * c * c * c) : 0.0;
+}
 
 std::optional<ParallelPolygon> ParallelPolygon::make(const Vec3& n, const Vec3& to_first,
                                                      const std::vector<Vec3>& offsets) {
@@ -66,8 +66,6 @@ Vec3 ParallelPolygon::sample(double u1, double u2) const {
     return unproject(frame_, q0_.x + b.x * e1.x + b.y * e2.x, q0_.y + b.x * e1.y + b.y * e2.y);
 }
 
-double ParallelPolygon::pdf(const Vec3& w) const { return pdf_cos3(w, frame_.n, area_); }
-
 Point2 ParallelPolygon::invert(const Vec3& w) const {
     const Vec3 l = frame_.to_local(w);
     const Point2 off{l.x / l.z - q0_.x, l.y / l.z - q0_.y};
@@ -83,10 +81,8 @@ Point2 ParallelPolygon::invert(const Vec3& w) const {
     return {std::clamp((a1_ + u.x * (area_ - a1_)) / area_, 0.0, 1.0), u.y};
 }
 
-std::optional<ParallelEllipse> ParallelEllipse::make(const Vec3& x, const Vec3& n,
-                                                     const Vec3& to_center, const Vec3& axis_a,
-                                                     const Vec3& axis_b) {
-    (void)x;
+std::optional<ParallelEllipse> ParallelEllipse::make(const Vec3& n, const Vec3& to_center,
+                                                     const Vec3& axis_a, const Vec3& axis_b) {
     ParallelEllipse p;
     p.frame_ = Frame(n);
     const Vec3 c = p.frame_.to_local(to_center);
@@ -119,8 +115,6 @@ Vec3 ParallelEllipse::sample(double u1, double u2) const {
                    center_z_.y + rho_dir_.y * s + rho_dir_.x * t};
     return unproject(frame_, qc_.x + g1_.x * z.x + g2_.x * z.y, qc_.y + g1_.y * z.x + g2_.y * z.y);
 }
-
-double ParallelEllipse::pdf(const Vec3& w) const { return pdf_cos3(w, frame_.n, area_); }
 
 Point2 ParallelEllipse::invert(const Vec3& w) const {
     const Vec3 l = frame_.to_local(w);

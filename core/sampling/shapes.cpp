@@ -261,7 +261,7 @@ double EllipseLight::pdf_clipped(const Vec3& x, const ClippedDisk& part, const V
 }
 
 std::optional<ParallelEllipse> EllipseLight::parallel(const Vec3& x, const Vec3& n) const {
-    return ParallelEllipse::make(x, n, center - x, axis_a, axis_b);
+    return ParallelEllipse::make(n, center - x, axis_a, axis_b);
 }
 
 std::optional<LightSample> EllipseLight::sample_parallel(const Vec3& x, const Vec3& n,

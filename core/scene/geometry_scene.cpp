@@ -48,6 +48,124 @@ bool make_ray(const Vec3& o, const Vec3& d, double tmin, double tmax, RTCRay& ra
     return ray.tfar >= ray.tnear;
 }
 
+// Throws std::invalid_argument naming the mesh (`who`) and the problem.
+struct MeshError {
+    std::string who;
+    [[noreturn]] void operator()(const std::string& what) const {
+        throw std::invalid_argument(who + what);
+    }
+};
+
+// The input arrays' presence and shapes, and the emission's range.
+void check_shapes(const MeshInput& in, const MeshError& fail) {
+    if (!in.positions.present()) fail("positions are missing");
+    if (!in.triangles.data && in.triangles.rows > 0) fail("triangles are missing");
+    if (in.positions.cols != 3)
+        fail("positions must have shape (V, 3), got " + shape(in.positions.rows, in.positions.cols));
+    if (in.triangles.cols != 3)
+        fail("triangles must have shape (T, 3), got " + shape(in.triangles.rows, in.triangles.cols));
+    if (in.positions.rows == 0) fail("empty mesh: no vertices");
+    if (in.triangles.rows == 0) fail("empty mesh: no triangles");
+    const std::size_t V = in.positions.rows, T = in.triangles.rows;
+    if (T > (std::size_t(1) << 31) || V > (std::size_t(1) << 32) - 1)
+        fail("too many vertices or triangles for Embree");
+    if (in.normals.present() && (in.normals.rows != 3 * T || in.normals.cols != 3))
+        fail("normals must be per corner with shape (3T, 3) = " + shape(3 * T, 3) + ", got " +
+             shape(in.normals.rows, in.normals.cols));
+    if (in.uvs.present() && (in.uvs.rows != 3 * T || in.uvs.cols != 2))
+        fail("uvs must be per corner with shape (3T, 2) = " + shape(3 * T, 2) + ", got " +
+             shape(in.uvs.rows, in.uvs.cols));
+    if (in.emission && (!isfinite(*in.emission) || in.emission->x < 0 ||
+                        in.emission->y < 0 || in.emission->z < 0))
+        fail("emission must be finite and non-negative, got " + fmt(*in.emission));
+}
+
+std::vector<Vec3> copy_positions(const ScalarArray& positions, const MeshError& fail) {
+    std::vector<Vec3> out(positions.rows);
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const Vec3 p{positions.at(i, 0), positions.at(i, 1), positions.at(i, 2)};
+        if (!isfinite(p)) fail("vertex " + std::to_string(i) + " is not finite: " + fmt(p));
+        // Embree stores floats and refuses rays beyond its FLT_LARGE (1.8e18).
+        if (!traceable(p))
+            fail("vertex " + std::to_string(i) + " lies beyond ±1e18 m, the range rays reach: " +
+                 fmt(p));
+        out[i] = p;
+    }
+    return out;
+}
+
+std::vector<std::array<std::uint32_t, 3>> copy_triangles(const IndexArray& triangles,
+                                                         std::size_t num_vertices,
+                                                         const MeshError& fail) {
+    std::vector<std::array<std::uint32_t, 3>> out(triangles.rows);
+    for (std::size_t t = 0; t < out.size(); ++t) {
+        const std::uint32_t* idx = triangles.data + 3 * t;
+        for (int k = 0; k < 3; ++k) {
+            if (idx[k] >= num_vertices) {
+                fail("triangle " + std::to_string(t) + " = (" + std::to_string(idx[0]) + ", " +
+                     std::to_string(idx[1]) + ", " + std::to_string(idx[2]) +
+                     ") has vertex index " + std::to_string(idx[k]) +
+                     " out of range (mesh has " + std::to_string(num_vertices) + " vertices)");
+            }
+        }
+        out[t] = {idx[0], idx[1], idx[2]};
+    }
+    return out;
+}
+
+std::vector<Vec3> copy_corner_normals(const ScalarArray& normals, const MeshError& fail) {
+    std::vector<Vec3> out(normals.rows);
+    for (std::size_t c = 0; c < out.size(); ++c) {
+        const Vec3 n{normals.at(c, 0), normals.at(c, 1), normals.at(c, 2)};
+        if (!isfinite(n))
+            fail("normal of corner " + std::to_string(c) + " (triangle " +
+                 std::to_string(c / 3) + ") is not finite: " + fmt(n));
+        out[c] = n;
+    }
+    return out;
+}
+
+std::vector<std::array<double, 2>> copy_corner_uvs(const ScalarArray& uvs,
+                                                   const MeshError& fail) {
+    std::vector<std::array<double, 2>> out(uvs.rows);
+    for (std::size_t c = 0; c < out.size(); ++c) {
+        const double u = uvs.at(c, 0), v = uvs.at(c, 1);
+        if (!std::isfinite(u) || !std::isfinite(v))
+            fail("uv of corner " + std::to_string(c) + " (triangle " + std::to_string(c / 3) +
+                 ") is not finite");
+        out[c] = {u, v};
+    }
+    return out;
+}
+
+// Twice the triangle's area, or 0 when it is degenerate: zero area, or an angle
+// too thin to have a meaningful plane. Degenerate triangles stay in the mesh
+// (indices are stable for baking) but are never hit and never become lights.
+double proper_twice_area(const std::array<Vec3, 3>& v, Vec3* plane_normal = nullptr) {
+    const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
+    const Vec3 c = cross(e1, e2);
+    const double twice_area = length(c);
+    if (!(twice_area > 1e-12 * length(e1) * length(e2))) return 0.0;
+    if (plane_normal) *plane_normal = c / twice_area;
+    return twice_area;
+}
+
+// Sets the mesh's area and degenerate-triangle count; returns the number of
+// proper (traceable) triangles.
+std::size_t measure_triangles(Mesh& m) {
+    std::size_t good = 0;
+    for (std::uint32_t t = 0; t < m.num_triangles(); ++t) {
+        const double twice_area = proper_twice_area(m.triangle_vertices(t));
+        if (twice_area == 0.0) {
+            ++m.degenerate_triangles;
+        } else {
+            m.area += 0.5 * twice_area;
+            ++good;
+        }
+    }
+    return good;
+}
+
 std::size_t thread_slot(std::size_t slots) {
     static std::atomic<std::size_t> next{0};
     thread_local const std::size_t slot = next.fetch_add(1, std::memory_order_relaxed);
@@ -111,98 +229,31 @@ GeometryScene::~GeometryScene() {
 
 std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
     const auto id = static_cast<std::uint32_t>(meshes_.size());
-    const std::string who =
-        "add_mesh: mesh " + std::to_string(id) + (in.name.empty() ? "" : " '" + in.name + "'") + ": ";
-    auto fail = [&](const std::string& what) { throw std::invalid_argument(who + what); };
-
-    // Shapes.
-    if (!in.positions.present()) fail("positions are missing");
-    if (!in.triangles.data && in.triangles.rows > 0) fail("triangles are missing");
-    if (in.positions.cols != 3)
-        fail("positions must have shape (V, 3), got " + shape(in.positions.rows, in.positions.cols));
-    if (in.triangles.cols != 3)
-        fail("triangles must have shape (T, 3), got " + shape(in.triangles.rows, in.triangles.cols));
-    if (in.positions.rows == 0) fail("empty mesh: no vertices");
-    if (in.triangles.rows == 0) fail("empty mesh: no triangles");
-    const std::size_t V = in.positions.rows, T = in.triangles.rows;
-    if (T > (std::size_t(1) << 31) || V > (std::size_t(1) << 32) - 1)
-        fail("too many vertices or triangles for Embree");
-    if (in.normals.present() && (in.normals.rows != 3 * T || in.normals.cols != 3))
-        fail("normals must be per corner with shape (3T, 3) = " + shape(3 * T, 3) + ", got " +
-             shape(in.normals.rows, in.normals.cols));
-    if (in.uvs.present() && (in.uvs.rows != 3 * T || in.uvs.cols != 2))
-        fail("uvs must be per corner with shape (3T, 2) = " + shape(3 * T, 2) + ", got " +
-             shape(in.uvs.rows, in.uvs.cols));
-    if (in.emission && (!isfinite(*in.emission) || in.emission->x < 0 ||
-                        in.emission->y < 0 || in.emission->z < 0))
-        fail("emission must be finite and non-negative, got " + fmt(*in.emission));
+    const MeshError fail{"add_mesh: mesh " + std::to_string(id) +
+                         (in.name.empty() ? "" : " '" + in.name + "'") + ": "};
+    check_shapes(in, fail);
 
     Mesh m;
     m.name = in.name;
-    m.positions.resize(V);
-    for (std::size_t i = 0; i < V; ++i) {
-        const Vec3 p{in.positions.at(i, 0), in.positions.at(i, 1), in.positions.at(i, 2)};
-        if (!isfinite(p)) fail("vertex " + std::to_string(i) + " is not finite: " + fmt(p));
-        // Embree stores floats and refuses rays beyond its FLT_LARGE (1.8e18).
-        if (!traceable(p))
-            fail("vertex " + std::to_string(i) + " lies beyond ±1e18 m, the range rays reach: " +
-                 fmt(p));
-        m.positions[i] = p;
-    }
-    m.triangles.resize(T);
-    for (std::size_t t = 0; t < T; ++t) {
-        const std::uint32_t* idx = in.triangles.data + 3 * t;
-        for (int k = 0; k < 3; ++k) {
-            if (idx[k] >= V) {
-                fail("triangle " + std::to_string(t) + " = (" + std::to_string(idx[0]) + ", " +
-                     std::to_string(idx[1]) + ", " + std::to_string(idx[2]) +
-                     ") has vertex index " + std::to_string(idx[k]) +
-                     " out of range (mesh has " + std::to_string(V) + " vertices)");
-            }
-        }
-        m.triangles[t] = {idx[0], idx[1], idx[2]};
-    }
-    if (in.normals.present()) {
-        m.corner_normals.resize(3 * T);
-        for (std::size_t c = 0; c < 3 * T; ++c) {
-            const Vec3 n{in.normals.at(c, 0), in.normals.at(c, 1), in.normals.at(c, 2)};
-            if (!isfinite(n))
-                fail("normal of corner " + std::to_string(c) + " (triangle " +
-                     std::to_string(c / 3) + ") is not finite: " + fmt(n));
-            m.corner_normals[c] = n;
-        }
-    }
-    if (in.uvs.present()) {
-        m.corner_uvs.resize(3 * T);
-        for (std::size_t c = 0; c < 3 * T; ++c) {
-            const double u = in.uvs.at(c, 0), v = in.uvs.at(c, 1);
-            if (!std::isfinite(u) || !std::isfinite(v))
-                fail("uv of corner " + std::to_string(c) + " (triangle " +
-                     std::to_string(c / 3) + ") is not finite");
-            m.corner_uvs[c] = {u, v};
-        }
-    }
+    m.positions = copy_positions(in.positions, fail);
+    m.triangles = copy_triangles(in.triangles, in.positions.rows, fail);
+    if (in.normals.present()) m.corner_normals = copy_corner_normals(in.normals, fail);
+    if (in.uvs.present()) m.corner_uvs = copy_corner_uvs(in.uvs, fail);
     if (in.emission && (in.emission->x > 0 || in.emission->y > 0 || in.emission->z > 0))
         m.emission = in.emission;
+    const std::size_t good = measure_triangles(m);
 
-    // Areas and degenerate triangles (zero area, or an angle too thin to have a
-    // meaningful plane). They stay in the mesh (indices are stable for baking)
-    // but are never hit and never become lights.
-    std::size_t good = 0;
-    for (std::uint32_t t = 0; t < T; ++t) {
-        const auto v = m.triangle_vertices(t);
-        const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
-        const double twice_area = length(cross(e1, e2));
-        const bool degenerate = !(twice_area > 1e-12 * length(e1) * length(e2));
-        if (degenerate) {
-            ++m.degenerate_triangles;
-        } else {
-            m.area += 0.5 * twice_area;
-            ++good;
-        }
-    }
+    attach_to_embree(m, id, fail.who);
+    meshes_.push_back(std::move(m));
+    occluder_triangles_ += good;
+    committed_ = false;
+    return id;
+}
 
-    // Embree copy (single precision).
+void GeometryScene::attach_to_embree(const Mesh& m, std::uint32_t id,
+                                     const std::string& who) {
+    // Embree keeps its own single-precision copy.
+    const std::size_t V = m.positions.size(), T = m.triangles.size();
     RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     device_->check();
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -226,11 +277,6 @@ std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
     rtcAttachGeometryByID(scene_, geom, id);
     rtcReleaseGeometry(geom);
     device_->check();
-
-    meshes_.push_back(std::move(m));
-    occluder_triangles_ += good;
-    committed_ = false;
-    return id;
 }
 
 std::uint32_t GeometryScene::add_mesh(const std::vector<Vec3>& positions,
@@ -363,14 +409,11 @@ std::vector<EmissiveTriangle> GeometryScene::emissive_triangles() const {
         if (!m.is_emissive()) continue;
         for (std::uint32_t t = 0; t < m.num_triangles(); ++t) {
             const auto v = m.triangle_vertices(t);
-            const Vec3 e1 = v[1] - v[0], e2 = v[2] - v[0];
-            const Vec3 c = cross(e1, e2);
-            const double twice_area = length(c);
-            if (!(twice_area > 1e-12 * length(e1) * length(e2))) continue;  // degenerate
             EmissiveTriangle e;
+            const double twice_area = proper_twice_area(v, &e.normal);
+            if (twice_area == 0.0) continue;  // degenerate
             e.vertices = v;
             e.radiance = *m.emission;
-            e.normal = c / twice_area;
             e.area = 0.5 * twice_area;
             e.mesh = id;
             e.triangle = t;

@@ -166,6 +166,8 @@ public:
     RTCScene handle() const { return scene_; }
 
 private:
+    // Hands Embree its single-precision copy of a validated mesh, as geometry `id`.
+    void attach_to_embree(const Mesh& mesh, std::uint32_t id, const std::string& who);
     void require_committed(const char* what) const;
     void count_rays(std::uint64_t n) const;
 

@@ -6,10 +6,13 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <functional>
+#include <mutex>
 #include <new>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <vector>
 
 #include "mis/strategy.h"
 #include "omis/omis.h"
@@ -125,6 +128,46 @@ inline void release(RefCounted* object) {
         object->tag = 0;
         delete object;
     }
+}
+
+// A job's per-round sample counts as the C caller passed them (copied).
+inline std::vector<int> counts_argument(const int* counts, int numCounts) {
+    if (numCounts < 0) throw std::invalid_argument("numCounts: must not be negative");
+    if (numCounts > 0) checked(counts, "counts");
+    return std::vector<int>(counts, counts + numCounts);
+}
+
+// A job's progress function: may be replaced while other threads execute the
+// job, each of which takes the one set when it starts.
+class ProgressSlot {
+public:
+    void set(OMISProgressFunction function, void* user) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        function_ = function;
+        user_ = user;
+    }
+    std::function<bool(double)> get() const {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!function_) return nullptr;
+        return [function = function_, user = user_](double fraction) {
+            return function(user, fraction);
+        };
+    }
+
+private:
+    mutable std::mutex mutex_;
+    OMISProgressFunction function_ = nullptr;
+    void* user_ = nullptr;
+};
+
+// The bodies of omisRetainX and omisReleaseX.
+template <class T>
+void retain_handle(T* handle, const char* what) {
+    guarded_void([&] { retain(checked(handle, what)); });
+}
+template <class T>
+void release_handle(T* handle, const char* what) {
+    guarded_void([&] { release(checked(handle, what)); });
 }
 
 }  // namespace omis::api

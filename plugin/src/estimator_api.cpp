@@ -67,11 +67,11 @@ OMIS_API OMISEstimator omisNewEstimator(OMISStrategy strategy, int numTechniques
 }
 
 OMIS_API void omisRetainEstimator(OMISEstimator estimator) {
-    guarded_void([&] { retain(checked(estimator, "estimator")); });
+    retain_handle(estimator, "estimator");
 }
 
 OMIS_API void omisReleaseEstimator(OMISEstimator estimator) {
-    guarded_void([&] { release(checked(estimator, "estimator")); });
+    release_handle(estimator, "estimator");
 }
 
 OMIS_API void omisSetEstimatorFloat(OMISEstimator estimator, const char* name, double value) {

@@ -1,5 +1,6 @@
-// C ABI of scenes and direct lighting (omis.h, "Scenes and direct lighting").
+// C ABI of scenes (omis.h, "Scenes and direct lighting"; the lighting job is in lighting_api.cpp).
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
@@ -13,7 +14,6 @@
 
 #include "api_common.h"
 #include "scene_impl.h"
-#include "render/direct_lighting.h"
 #include "render/effect_plan.h"
 #include "render/scene.h"
 #include "render/techniques.h"
@@ -74,16 +74,24 @@ unsigned int add_light(OMISScene scene, const char* what, Make&& make) {
     });
 }
 
+// Rect and ellipse lights: a point and two perpendicular vectors, each checked
+// under its own argument name.
+using PlanarFactory = omis::Light (*)(const omis::Vec3&, const omis::Vec3&, const omis::Vec3&,
+                                      const omis::Vec3&, bool, double);
+unsigned int add_planar_light(OMISScene scene, const char* what, PlanarFactory make,
+                              const std::array<const double*, 3>& frame,
+                              const std::array<const char*, 3>& names,
+                              const double* radiance, bool two_sided, double spread) {
+    return add_light(scene, what, [&] {
+        return make(vec3(frame[0], names[0]), vec3(frame[1], names[1]),
+                    vec3(frame[2], names[2]), vec3(radiance, "radiance"), two_sided, spread);
+    });
+}
+
 }  // namespace
 
-TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const char* names,
-                                             const int* samples) {
-    TechniqueChoice choice;
-    if (!names || !*names) {
-        omis::default_techniques(scene, choice.techniques, choice.samples);
-        return choice;
-    }
-    const std::string list = names;
+std::vector<omis::Technique> omis::api::parse_technique_list(const std::string& list) {
+    std::vector<omis::Technique> techniques;
     std::size_t begin = 0;
     while (true) {
         const std::size_t end = std::min(list.find(',', begin), list.size());
@@ -99,10 +107,21 @@ TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const cha
         if (!technique)
             throw std::invalid_argument("techniques: unknown technique '" + name + "' (" +
                                         omis::technique_grammar() + ")");
-        choice.techniques.push_back(*technique);
+        techniques.push_back(*technique);
         if (end == list.size()) break;
         begin = end + 1;
     }
+    return techniques;
+}
+
+TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const char* names,
+                                             const int* samples) {
+    TechniqueChoice choice;
+    if (!names || !*names) {
+        omis::default_techniques(scene, choice.techniques, choice.samples);
+        return choice;
+    }
+    choice.techniques = parse_technique_list(names);
     checked(samples, "samples");
     for (std::size_t k = 0; k < choice.techniques.size(); ++k) {
         if (samples[k] < 0)
@@ -113,25 +132,40 @@ TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const cha
     return choice;
 }
 
-namespace {
-
-std::string fmt_row(const double* v) {
-    return "(" + std::to_string(v[0]) + ", " + std::to_string(v[1]) + ", " +
-           std::to_string(v[2]) + ")";
+TechniqueChoice omis::api::choose_techniques(const omis::Scene& scene, const std::string& names,
+                                             const std::vector<int>& counts) {
+    TechniqueChoice choice;
+    if (names.empty()) {
+        if (!counts.empty())
+            throw std::invalid_argument("counts: given without techniques (no techniques "
+                                        "lets the effect plan choose both)");
+        omis::default_techniques(scene, choice.techniques, choice.samples);
+        return choice;
+    }
+    choice.techniques = parse_technique_list(names);
+    choice.samples = counts.empty() ? std::vector<int>(choice.techniques.size(), 1) : counts;
+    if (choice.samples.size() != choice.techniques.size())
+        throw std::invalid_argument("counts: expected " +
+                                    std::to_string(choice.techniques.size()) +
+                                    " entries (one per technique), got " +
+                                    std::to_string(counts.size()));
+    for (std::size_t k = 0; k < choice.samples.size(); ++k)
+        if (choice.samples[k] < 0)
+            throw std::invalid_argument("counts: entry " + std::to_string(k) + " (" +
+                                        choice.techniques[k].name() + ") is negative");
+    return choice;
 }
-
-}  // namespace
 
 OMIS_API OMISScene omisNewScene(void) {
     return guarded<OMISScene>(nullptr, [&] { return new OMISSceneImpl(); });
 }
 
 OMIS_API void omisRetainScene(OMISScene scene) {
-    guarded_void([&] { retain(checked(scene, "scene")); });
+    retain_handle(scene, "scene");
 }
 
 OMIS_API void omisReleaseScene(OMISScene scene) {
-    guarded_void([&] { release(checked(scene, "scene")); });
+    release_handle(scene, "scene");
 }
 
 OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices,
@@ -176,26 +210,21 @@ OMIS_API unsigned int omisAddMesh(OMISScene scene, const void* vertices,
 }
 
 OMIS_API unsigned int omisAddRectLight(OMISScene scene, const double corner[3],
-                                            const double edgeU[3], const double edgeV[3],
-                                            const double radiance[3], bool twoSided,
-                                            double spread) {
-    return add_light(scene, "omisAddRectLight", [&] {
-        return omis::make_rect_light(vec3(corner, "corner"), vec3(edgeU, "edgeU"),
-                                     vec3(edgeV, "edgeV"), vec3(radiance, "radiance"),
-                                     twoSided, spread);
-    });
+                                       const double edgeU[3], const double edgeV[3],
+                                       const double radiance[3], bool twoSided,
+                                       double spread) {
+    return add_planar_light(scene, "omisAddRectLight", omis::make_rect_light,
+                            {corner, edgeU, edgeV}, {"corner", "edgeU", "edgeV"}, radiance,
+                            twoSided, spread);
 }
 
 OMIS_API unsigned int omisAddEllipseLight(OMISScene scene, const double center[3],
-                                               const double axisA[3],
-                                               const double axisB[3],
-                                               const double radiance[3], bool twoSided,
-                                               double spread) {
-    return add_light(scene, "omisAddEllipseLight", [&] {
-        return omis::make_ellipse_light(vec3(center, "center"), vec3(axisA, "axisA"),
-                                        vec3(axisB, "axisB"), vec3(radiance, "radiance"),
-                                        twoSided, spread);
-    });
+                                          const double axisA[3], const double axisB[3],
+                                          const double radiance[3], bool twoSided,
+                                          double spread) {
+    return add_planar_light(scene, "omisAddEllipseLight", omis::make_ellipse_light,
+                            {center, axisA, axisB}, {"center", "axisA", "axisB"}, radiance,
+                            twoSided, spread);
 }
 
 OMIS_API unsigned int omisAddPointLight(OMISScene scene, const double position[3],
@@ -294,90 +323,5 @@ OMIS_API size_t omisGetTechniqueNames(char* buffer, size_t bufferSize) {
         for (const std::string& name : omis::technique_names())
             text += (text.empty() ? "" : ",") + name;
         return copy_text(text, buffer, bufferSize);
-    });
-}
-
-OMIS_API bool omisDirectLighting(OMISScene scene, const double* points,
-                                 const double* normals, size_t count,
-                                 const char* techniques, const int* samples, int rounds,
-                                 OMISStrategy strategy, double beta, double cutoff,
-                                 uint64_t seed, double* value, double* variance,
-                                 OMISDirectLightingStats* stats,
-                                 OMISProgressFunction progress, void* user) {
-    return guarded(false, [&] {
-        auto* s = checked(scene, "scene");
-        ScopedRetain hold(s);
-        if (stats) *stats = OMISDirectLightingStats{};
-        const omis::Scene& sc = s->committed_scene("omisDirectLighting");
-
-        omis::DirectLightingSettings settings;
-        TechniqueChoice choice = choose_techniques(sc, techniques, samples);
-        settings.techniques = std::move(choice.techniques);
-        settings.samples = std::move(choice.samples);
-        if (rounds < 1)
-            throw std::invalid_argument("rounds: must be at least 1, got " +
-                                        std::to_string(rounds));
-        settings.rounds = rounds;
-        settings.strategy = to_core(strategy);
-        if (!(beta > 0) || !std::isfinite(beta))
-            throw std::invalid_argument("beta: must be a positive finite number");
-        if (!(cutoff >= 0 && cutoff <= 1))
-            throw std::invalid_argument("cutoff: must lie in [0, 1]");
-        settings.options.beta = beta;
-        settings.options.cutoff = cutoff;
-        settings.seed = seed;
-        if (count == 0) return true;
-
-        checked(points, "points");
-        checked(normals, "normals");
-        checked(value, "value");
-        if (count > std::numeric_limits<std::size_t>::max() / (3 * sizeof(double)))
-            throw std::invalid_argument("count: too many points");
-
-        // Validate, and normalise the normals into our own copy.
-        std::vector<double> unit(3 * count);
-        for (std::size_t i = 0; i < count; ++i) {
-            const double* p = points + 3 * i;
-            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-                throw std::invalid_argument("points: point " + std::to_string(i) +
-                                            " is not finite: " + fmt_row(p));
-            const double* n = normals + 3 * i;
-            if (!std::isfinite(n[0]) || !std::isfinite(n[1]) || !std::isfinite(n[2]))
-                throw std::invalid_argument("normals: normal " + std::to_string(i) +
-                                            " is not finite: " + fmt_row(n));
-            // Scale first so neither tiny nor huge components under/overflow.
-            const double scale =
-                std::max({std::abs(n[0]), std::abs(n[1]), std::abs(n[2])});
-            if (!(scale > 0))
-                throw std::invalid_argument("normals: normal " + std::to_string(i) +
-                                            " has zero length");
-            const double x = n[0] / scale, y = n[1] / scale, z = n[2] / scale;
-            const double len = std::sqrt(x * x + y * y + z * z);
-            unit[3 * i + 0] = x / len;
-            unit[3 * i + 1] = y / len;
-            unit[3 * i + 2] = z / len;
-        }
-        std::vector<double> scratch;
-        if (!variance) {
-            scratch.resize(3 * count);
-            variance = scratch.data();
-        }
-
-        omis::ProgressFunction report;
-        if (progress) report = [&](double fraction) { return progress(user, fraction); };
-        const omis::DirectLightingStats r = omis::direct_lighting(
-            sc, points, unit.data(), count, settings, value, variance, report);
-        if (stats) {
-            stats->points = r.points;
-            stats->samples = r.samples;
-            stats->raysTraced = r.rays_traced;
-            stats->misSystems = r.mis_systems;
-            stats->pdfEvaluations = r.pdf_evaluations;
-            stats->seconds = r.seconds;
-        }
-        if (r.cancelled)
-            throw ApiError(OMIS_ERROR_CANCELLED,
-                           "omisDirectLighting: cancelled by the progress callback");
-        return true;
     });
 }

@@ -51,10 +51,19 @@ struct TechniqueChoice {
     std::vector<int> samples;
 };
 
-// Parses the comma-separated technique list (or takes the scene's default).
-// Parses a comma-separated technique list with one sample count per name, or
-// takes the scene's default (effect plan) when names is NULL or "".
+// The techniques of a comma-separated list (spaces around names ignored);
+// errors name "techniques".
+std::vector<omis::Technique> parse_technique_list(const std::string& list);
+
+// A comma-separated technique list with one sample count per name in
+// `samples`, or the scene's default (effect plan) when names is NULL or "".
 TechniqueChoice choose_techniques(const omis::Scene& scene, const char* names,
                                   const int* samples);
+
+// As set on a job object: the listed techniques with `counts` per round (1 each
+// when counts is empty), or the scene's default when names is empty (counts
+// must then be empty too). Errors name "techniques" or "counts".
+TechniqueChoice choose_techniques(const omis::Scene& scene, const std::string& names,
+                                  const std::vector<int>& counts);
 
 }  // namespace omis::api

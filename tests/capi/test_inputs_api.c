@@ -17,38 +17,23 @@
 #endif
 #endif
 
-static int error_names(OMISError expected, const char* word) {
-    const char* message = NULL;
-    const OMISError code = omisGetError(&message);
-    if (code != expected || !message || !strstr(message, word)) {
-        fprintf(stderr, "  got error %d: %s\n", (int)code, message ? message : "(none)");
-        return 0;
-    }
-    return 1;
-}
-
 static void enums_out_of_range(OMISScene scene) {
     const int counts[2] = {1, 1};
     const float vertex[3] = {0, 0, 0};
     const uint32_t triangle[3] = {0, 0, 0};
-    const double p[3] = {0, 0, 0}, n[3] = {0, 0, 1};
-    double value[3], variance[3];
     CHECK(omisNewEstimator((OMISStrategy)42, 2, 1, counts) == NULL);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
     CHECK(omisNewEstimator((OMISStrategy)-7, 2, 1, counts) == NULL);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
     CHECK(omisNewBake(scene, (OMISBakeTarget)99, 0) == NULL);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "target"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "target"));
     {
         OMISScene other = omisNewScene();
         CHECK(omisAddMesh(other, vertex, (OMISDataType)1000, 0, 1, triangle, 1, NULL, NULL,
                                NULL) == OMIS_INVALID_ID);
-        CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "type"));
+        CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "type"));
         omisReleaseScene(other);
     }
-    CHECK(!omisDirectLighting(scene, p, n, 1, "bsdf", counts, 1, (OMISStrategy)12345, 2, 0.1, 0,
-                              value, variance, NULL, NULL, NULL));
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
 }
 
 static void bake_options_checked_at_commit(OMISScene scene) {
@@ -60,7 +45,7 @@ static void bake_options_checked_at_commit(OMISScene scene) {
         omisSetBakeFloat(bake, bad[i].name, bad[i].value);
         omisGetError(NULL); /* the setter may already refuse; commit must */
         omisCommitBake(bake);
-        CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, bad[i].name));
+        CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, bad[i].name));
         omisReleaseBake(bake);
     }
 }
@@ -76,7 +61,7 @@ static void estimator_committed_once(void) {
     CHECK(omisAddEstimatorSamples(e, 2, technique, sizeof(int), pdfs, 2 * sizeof(double), f,
                                   sizeof(double)));
     omisCommitEstimator(e); /* would drop the samples */
-    CHECK(error_names(OMIS_ERROR_INVALID_OPERATION, "already committed"));
+    CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "already committed"));
     CHECK(omisGetEstimatorResult(e, &estimate, NULL));
     CHECK(estimate == 1.0); /* both samples kept: f/q = 1/2 from each technique */
     omisReleaseEstimator(e);
@@ -88,11 +73,11 @@ static void foreign_and_released_handles(OMISScene scene) {
     const int counts[1] = {1};
     OMISEstimator estimator = omisNewEstimator(OMIS_STRATEGY_BALANCE, 1, 1, counts);
     omisCommitScene((OMISScene)(void*)not_a_handle);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
     omisCommitBake((OMISBake)(void*)estimator);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
     CHECK(omisNewBake((OMISScene)(void*)estimator, OMIS_BAKE_VERTICES, 0) == NULL);
-    CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
+    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
     omisReleaseEstimator(estimator);
 #ifndef OMIS_TEST_ASAN
     {
@@ -104,10 +89,10 @@ static void foreign_and_released_handles(OMISScene scene) {
         CHECK(result != NULL);
         omisReleaseBakeResult(result);
         CHECK(!omisWriteBakeResultEXR(result, "released.exr"));
-        CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
+        CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
         omisReleaseBake(bake);
         omisReleaseBake(bake); /* double release */
-        CHECK(error_names(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
+        CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "not a live handle"));
     }
 #else
     (void)scene;

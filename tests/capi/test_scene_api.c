@@ -1,5 +1,6 @@
 /* Scenes and direct lighting through the C ABI, from C: lifecycle, errors,
- * a rect light against Lambert's formula, cancellation, the effect plan. */
+ * a rect light against Lambert's formula, cancellation, the effect plan.
+ * The direct-lighting job's own parameters and errors: test_lighting_api.c. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,25 +9,9 @@
 #include "omis/omis.h"
 
 #include "check.h"
+#include "lighting_job.h"
 
 static const double kPi = 3.14159265358979323846;
-
-/* The error code, and that the message mentions `word` (NULL: not checked). */
-static int error_is(OMISError expected, const char* word) {
-    const char* message = NULL;
-    const OMISError code = omisGetError(&message);
-    if (code != expected) {
-        fprintf(stderr, "  expected error %d, got %d (%s)\n", (int)expected, (int)code,
-                message ? message : "no message");
-        return 0;
-    }
-    if (word && (!message || !strstr(message, word))) {
-        fprintf(stderr, "  message '%s' does not mention '%s'\n", message ? message : "",
-                word);
-        return 0;
-    }
-    return 1;
-}
 
 /* ---- Lambert's formula (SPEC §5), written here independently ------------ */
 
@@ -90,13 +75,8 @@ static void test_errors(void) {
     const uint32_t bad_tris[2][3] = {{0, 1, 2}, {0, 2, 4}};
     float nan_quad[4][3];
     const double zero_edge[3] = {0.0, 0.0, 0.0};
-    const double point[3] = {0.0, 0.0, 0.0}, up[3] = {0.0, 0.0, 1.0};
-    const double zero_normal[3] = {0.0, 0.0, 0.0};
-    const double nan_point[6] = {0.0, 0.0, 0.0, 0.0, NAN, 0.0};
-    const double ups[6] = {0.0, 0.0, 1.0, 0.0, 0.0, 1.0};
+    const double point[3] = {0.0, 0.0, 0.0};
     const int samples[2] = {1, 1};
-    const int negative[2] = {1, -1};
-    double value[6], variance[6];
     char text[16];
     OMISScene scene;
 
@@ -108,8 +88,7 @@ static void test_errors(void) {
     CHECK(omisAddRectLight(NULL, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           OMIS_INVALID_ID);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "scene"));
-    CHECK(!omisDirectLighting(NULL, point, up, 1, NULL, NULL, 1, OMIS_STRATEGY_BALANCE,
-                              2.0, 0.1, 0, value, variance, NULL, NULL, NULL));
+    CHECK(omisNewDirectLighting(NULL) == NULL);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "scene"));
     CHECK(omisGetEffectPlan(NULL, NULL, NULL, text, sizeof text) == 0);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "scene"));
@@ -155,8 +134,7 @@ static void test_errors(void) {
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "light"));
 
     /* use before commit */
-    CHECK(!omisDirectLighting(scene, point, up, 1, NULL, NULL, 1, OMIS_STRATEGY_BALANCE,
-                              2.0, 0.1, 0, value, variance, NULL, NULL, NULL));
+    omisReleaseDirectLighting(new_lighting(scene, NULL, NULL, 0, 1, "balance", 0));
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "commit"));
     CHECK(omisGetEffectPlan(scene, NULL, NULL, text, sizeof text) == 0);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "commit"));
@@ -174,50 +152,6 @@ static void test_errors(void) {
     omisSetLightFlags(scene, 0, false, true);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
 
-    /* invalid lighting arguments */
-    CHECK(!omisDirectLighting(scene, point, up, 1, "bsdf,uniform/areal", samples, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "'uniform/areal'"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, "bsdf,,uniform/area", samples, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "techniques"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, "bsdf,uniform/area", NULL, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "samples"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, "bsdf,uniform/area", negative, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "samples"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, "bsdf,bsdf", samples, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "twice"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, NULL, NULL, 0, OMIS_STRATEGY_BALANCE,
-                              2.0, 0.1, 0, value, variance, NULL, NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "rounds"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, NULL, NULL, 1, (OMISStrategy)99, 2.0,
-                              0.1, 0, value, variance, NULL, NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "strategy"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, NULL, NULL, 1, OMIS_STRATEGY_POWER,
-                              -1.0, 0.1, 0, value, variance, NULL, NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "beta"));
-    CHECK(!omisDirectLighting(scene, nan_point, ups, 2, NULL, NULL, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "point 1"));
-    CHECK(!omisDirectLighting(scene, point, zero_normal, 1, NULL, NULL, 1,
-                              OMIS_STRATEGY_BALANCE, 2.0, 0.1, 0, value, variance, NULL,
-                              NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "zero length"));
-    CHECK(!omisDirectLighting(scene, point, up, 1, NULL, NULL, 1, OMIS_STRATEGY_BALANCE,
-                              2.0, 0.1, 0, NULL, variance, NULL, NULL, NULL));
-    CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "value"));
-    /* count 0 succeeds without touching the arrays */
-    CHECK(omisDirectLighting(scene, NULL, NULL, 0, NULL, NULL, 1, OMIS_STRATEGY_BALANCE,
-                             2.0, 0.1, 0, NULL, NULL, NULL, NULL, NULL));
     CHECK(omisGetEffectPlan(scene, "nope", samples, text, sizeof text) == 0);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "'nope'"));
 
@@ -239,9 +173,7 @@ static void test_rect_light_matches_lambert(void) {
     const char* techniques[3] = {"bsdf,uniform/solid-angle",
                                  "uniform/area,unoccluded/parallel", NULL};
     const int samples[2] = {4, 4};
-    const OMISStrategy strategies[3] = {OMIS_STRATEGY_OPTIMAL_DIRECT,
-                                        OMIS_STRATEGY_BALANCE,
-                                        OMIS_STRATEGY_OPTIMAL_PROGRESSIVE};
+    const char* strategies[3] = {"optimal-direct", "balance", "optimal-progressive"};
     double verts[4][3], value[12], variance[12], unit[3];
     OMISDirectLightingStats stats;
     OMISScene scene = rect_scene();
@@ -254,11 +186,12 @@ static void test_rect_light_matches_lambert(void) {
         verts[3][k] = kCorner[k] + kEdgeV[k];
     }
     for (t = 0; t < 3; ++t) {
-        CHECK(omisDirectLighting(scene, &points[0][0], &normals[0][0], 4, techniques[t],
-                                 samples, 32, strategies[t], 2.0, 0.1,
-                                 1234u + (uint64_t)t, value, variance, &stats, NULL,
-                                 NULL));
+        OMISDirectLighting job =
+            new_lighting(scene, techniques[t], samples, 2, 32, strategies[t], 1234 + t);
+        CHECK(omisExecuteDirectLighting(job, &points[0][0], &normals[0][0], 4, value,
+                                        variance, &stats));
         CHECK(omisGetError(NULL) == OMIS_ERROR_NONE);
+        omisReleaseDirectLighting(job);
         CHECK(stats.points == 4);
         CHECK(stats.samples > 0 && stats.misSystems == 4);
         CHECK(stats.raysTraced == 0); /* no geometry: no shadow rays */
@@ -296,6 +229,7 @@ static void test_strided_mesh_and_shadow_rays(void) {
     const int samples[1] = {8};
     double value[3], variance[3];
     OMISDirectLightingStats stats;
+    OMISDirectLighting job;
     OMISScene scene = omisNewScene();
     int c;
     for (c = 0; c < 6; ++c) {
@@ -308,10 +242,10 @@ static void test_strided_mesh_and_shadow_rays(void) {
     CHECK(omisAddRectLight(scene, kCorner, kEdgeU, kEdgeV, kRadiance, false, kPi) ==
           0);
     omisCommitScene(scene);
-    CHECK(omisDirectLighting(scene, point, up, 1, "unoccluded/solid-angle", samples, 4,
-                             OMIS_STRATEGY_OPTIMAL_DIRECT, 2.0, 0.1, 7, value, variance,
-                             &stats, NULL, NULL));
+    job = new_lighting(scene, "unoccluded/solid-angle", samples, 1, 4, "optimal-direct", 7);
+    CHECK(omisExecuteDirectLighting(job, point, up, 1, value, variance, &stats));
     CHECK(omisGetError(NULL) == OMIS_ERROR_NONE);
+    omisReleaseDirectLighting(job);
     CHECK(stats.raysTraced > 0);
     CHECK(value[0] > 0.0 && value[1] > value[0]);
     omisReleaseScene(scene);
@@ -332,6 +266,7 @@ static void test_cancellation(void) {
     double* value = malloc(sizeof(double) * 3 * kPoints);
     const int samples[2] = {8, 8};
     OMISDirectLightingStats stats;
+    OMISDirectLighting job;
     OMISScene scene = rect_scene();
     int i;
     for (i = 0; i < kPoints; ++i) {
@@ -342,10 +277,11 @@ static void test_cancellation(void) {
         normals[3 * i + 1] = 0.0;
         normals[3 * i + 2] = 1.0;
     }
-    CHECK(!omisDirectLighting(scene, points, normals, kPoints, "bsdf,uniform/area",
-                              samples, 4, OMIS_STRATEGY_OPTIMAL_DIRECT, 2.0, 0.1, 0,
-                              value, NULL, &stats, stop_at_once, NULL));
+    job = new_lighting(scene, "bsdf,uniform/area", samples, 2, 4, "optimal-direct", 0);
+    omisSetDirectLightingProgressFunction(job, stop_at_once, NULL);
+    CHECK(!omisExecuteDirectLighting(job, points, normals, kPoints, value, NULL, &stats));
     CHECK(error_is(OMIS_ERROR_CANCELLED, "cancel"));
+    omisReleaseDirectLighting(job);
     CHECK(progress_calls >= 1);
     CHECK(stats.points < kPoints);
     omisReleaseScene(scene);

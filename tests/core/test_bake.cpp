@@ -12,6 +12,7 @@
 #include "bake/vertex_points.h"
 #include "bake/uv_raster.h"
 #include "sampling/irradiance.h"
+#include "support/unit_square.h"
 
 using namespace omis;
 
@@ -139,15 +140,9 @@ TEST_CASE("coverage: islands with shared edges have no cracks and no double cove
 
 TEST_CASE("margin fills exactly the requested ring from the nearest texel", "[bake]") {
     // One island: a quad over UV [0.4, 0.6]², 20×20 texels.
-    std::vector<float> p = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    std::vector<std::uint32_t> t = {0, 1, 2, 0, 2, 3};
-    std::vector<float> uv = {0.4f, 0.4f, 0.6f, 0.4f, 0.6f, 0.6f, 0.4f, 0.4f, 0.6f, 0.6f, 0.4f, 0.6f};
-    MeshInput m;
-    m.positions = ScalarArray::of(p.data(), 4, 3);
-    m.triangles = IndexArray{t.data(), 2, 3};
-    m.uvs = ScalarArray::of(uv.data(), 6, 2);
+    const auto square = testing::UnitSquare::island(0.4f, 0.6f);
     GeometryScene scene;
-    scene.add_mesh(m);
+    scene.add_mesh(square.input());
     const UvCoverage c = rasterize_uv(scene.mesh(0), 20, 20);
     REQUIRE(c.covered == 16);  // texels 8..11 in x and y
     for (int margin : {0, 1, 3}) {

@@ -15,6 +15,7 @@
 
 #include "render/direct_lighting.h"
 #include "sampling/irradiance.h"
+#include "support/lighting_settings.h"
 
 using namespace omis;
 
@@ -41,12 +42,8 @@ Estimate light_copies(const Scene& scene, const Vec3& x, const Vec3& n,
                       const std::vector<std::string>& names, const std::vector<int>& samples,
                       int rounds, Strategy strategy, std::uint64_t seed = 1,
                       DirectLightingStats* stats_out = nullptr) {
-    DirectLightingSettings s;
-    for (const auto& name : names) s.techniques.push_back(*parse_technique(name));
-    s.samples = samples;
-    s.rounds = rounds;
-    s.strategy = strategy;
-    s.seed = seed;
+    const DirectLightingSettings s =
+        testing::lighting_settings(names, samples, rounds, strategy, seed);
     std::vector<double> points, normals, value(3 * kCopies), variance(3 * kCopies);
     for (int i = 0; i < kCopies; ++i) {
         points.insert(points.end(), {x.x, x.y, x.z});

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <random>
 #include <thread>
 
@@ -265,6 +266,17 @@ void make_grid(int N, double z, std::vector<Vec3>& v, std::vector<Tri>& t) {
             t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
         }
 }
+
+// A committed scene of one N × N grid at height 0.
+std::unique_ptr<GeometryScene> grid_scene(int N) {
+    std::vector<Vec3> v;
+    std::vector<Tri> t;
+    make_grid(N, 0, v, t);
+    auto scene = std::make_unique<GeometryScene>();
+    scene->add_mesh(v, t);
+    scene->commit();
+    return scene;
+}
 }  // namespace
 
 TEST_CASE("a mesh of 100k+ triangles builds and answers", "[scene]") {
@@ -303,12 +315,7 @@ TEST_CASE("a mesh of 100k+ triangles builds and answers", "[scene]") {
 }
 
 TEST_CASE("batch occlusion agrees with single rays", "[scene]") {
-    std::vector<Vec3> v;
-    std::vector<Tri> t;
-    make_grid(32, 0, v, t);
-    GeometryScene scene;
-    scene.add_mesh(v, t);
-    scene.commit();
+    const auto scene = grid_scene(32);
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> u(-1, 1);
     std::vector<Ray> rays(1000);
@@ -321,11 +328,11 @@ TEST_CASE("batch occlusion agrees with single rays", "[scene]") {
         r.tmax = 1 + u(rng);  // some empty intervals too
     }
     std::unique_ptr<bool[]> out(new bool[rays.size()]);
-    scene.occluded(rays.data(), rays.size(), out.get());
+    scene->occluded(rays.data(), rays.size(), out.get());
     int disagree = 0, hits = 0;
     for (std::size_t i = 0; i < rays.size(); ++i) {
         const auto& r = rays[i];
-        disagree += out[i] != scene.occluded(r.origin, r.direction, r.tmin, r.tmax);
+        disagree += out[i] != scene->occluded(r.origin, r.direction, r.tmin, r.tmax);
         hits += out[i];
     }
     CHECK(disagree == 0);
@@ -437,12 +444,7 @@ TEST_CASE("Embree errors become exceptions with Embree's message", "[scene]") {
 }
 
 TEST_CASE("scene occlusion throughput", "[.bench][scene]") {
-    std::vector<Vec3> v;
-    std::vector<Tri> t;
-    make_grid(512, 0, v, t);
-    GeometryScene scene;
-    scene.add_mesh(v, t);
-    scene.commit();
+    const auto scene = grid_scene(512);
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1, 1);
     std::vector<Ray> rays(1 << 20);
@@ -454,9 +456,9 @@ TEST_CASE("scene occlusion throughput", "[.bench][scene]") {
     std::unique_ptr<bool[]> out(new bool[rays.size()]);
     auto t0 = std::chrono::steady_clock::now();
     std::size_t hits = 0;
-    for (auto& r : rays) hits += scene.occluded(r.origin, r.direction, r.tmin, r.tmax);
+    for (auto& r : rays) hits += scene->occluded(r.origin, r.direction, r.tmin, r.tmax);
     auto t1 = std::chrono::steady_clock::now();
-    scene.occluded(rays.data(), rays.size(), out.get());
+    scene->occluded(rays.data(), rays.size(), out.get());
     auto t2 = std::chrono::steady_clock::now();
     const double single = std::chrono::duration<double>(t1 - t0).count();
     const double batch = std::chrono::duration<double>(t2 - t1).count();

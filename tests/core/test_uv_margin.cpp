@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "bake/uv_raster.h"
+#include "support/unit_square.h"
 
 using namespace omis;
 
@@ -16,9 +17,7 @@ namespace {
 // the diagonal 0–2, cut apart in UV: A at scale 0.3 near the origin, B rotated by
 // 90° and moved away, so the diagonal is a seam. The other edges are boundaries.
 struct SeamSquare {
-    std::vector<float> positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3};
-    std::vector<float> uvs;
+    testing::UnitSquare square;
     GeometryScene scene;
 
     SeamSquare() {
@@ -30,12 +29,8 @@ struct SeamSquare {
             return std::array<float, 2>{0.9f - 0.3f * y, 0.55f + 0.3f * x};
         };
         for (auto uv : {a(0, 0), a(1, 0), a(1, 1), b(0, 0), b(1, 1), b(0, 1)})
-            uvs.insert(uvs.end(), uv.begin(), uv.end());
-        MeshInput m;
-        m.positions = ScalarArray::of(positions.data(), 4, 3);
-        m.triangles = IndexArray{triangles.data(), 2, 3};
-        m.uvs = ScalarArray::of(uvs.data(), 6, 2);
-        scene.add_mesh(m);
+            square.uvs.insert(square.uvs.end(), uv.begin(), uv.end());
+        scene.add_mesh(square.input());
     }
 };
 
@@ -102,16 +97,9 @@ TEST_CASE("adjacent-faces margin: across a seam from the face adjacent in 3D", "
 
 TEST_CASE("adjacent-faces margin: a mesh without seams extends as before", "[bake]") {
     // The same square with one UV island: every border edge is a mesh boundary.
-    std::vector<float> p = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    std::vector<std::uint32_t> t = {0, 1, 2, 0, 2, 3};
-    std::vector<float> uv = {0.3f, 0.3f, 0.7f, 0.3f, 0.7f, 0.7f,
-                             0.3f, 0.3f, 0.7f, 0.7f, 0.3f, 0.7f};
-    MeshInput m;
-    m.positions = ScalarArray::of(p.data(), 4, 3);
-    m.triangles = IndexArray{t.data(), 2, 3};
-    m.uvs = ScalarArray::of(uv.data(), 6, 2);
+    const auto square = testing::UnitSquare::island(0.3f, 0.7f);
     GeometryScene scene;
-    scene.add_mesh(m);
+    scene.add_mesh(square.input());
     const UvCoverage c = rasterize_uv(scene.mesh(0), 32, 32);
     for (int margin : {0, 1, 5})
         CHECK(adjacent_margin_sources(c, scene.mesh(0), margin) ==

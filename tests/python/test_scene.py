@@ -211,6 +211,18 @@ def test_deterministic_for_a_seed():
     assert np.isfinite(big[0]).all()
 
 
+def test_heuristic_options_reach_the_native_job():
+    # The power heuristic with beta = 1 and the cutoff heuristic with cutoff = 0 are
+    # the balance heuristic (SPEC §1); another beta is not.
+    scene = rect_scene()
+    run = lambda **kw: omis.direct_lighting(scene, POINTS, NORMALS, ["bsdf", "uniform/area"],
+                                            [2, 2], rounds=4, seed=5, **kw)[0]
+    balance = run(strategy="balance")
+    np.testing.assert_allclose(run(strategy="power", beta=1.0), balance, rtol=1e-12)
+    np.testing.assert_allclose(run(strategy="cutoff", cutoff=0.0), balance, rtol=1e-12)
+    assert not np.allclose(run(strategy="power", beta=3.0), balance, rtol=1e-6)
+
+
 def test_stats_and_effect_plan():
     scene = rect_scene()
     techniques, samples = ["bsdf", "uniform/solid-angle"], [2, 3]

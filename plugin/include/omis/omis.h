@@ -28,11 +28,19 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* Versions: while the major version is 0 the interface may still change, and
+ * every change that breaks source or binary compatibility raises the minor
+ * version (patch back to 0); additions raise the patch version. A program
+ * checks omisGetVersion() against OMIS_VERSION at start-up to know it loaded
+ * the library it was built for (the Python module does).
+ *   0.2.0: omisDirectLighting's argument list became the OMISDirectLighting
+ *          object (omisNewDirectLighting, omisSetDirectLighting*,
+ *          omisCommitDirectLighting, omisExecuteDirectLighting). */
 #define OMIS_VERSION_MAJOR 0
-#define OMIS_VERSION_MINOR 1
+#define OMIS_VERSION_MINOR 2
 #define OMIS_VERSION_PATCH 0
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
-#define OMIS_VERSION_STRING "0.1.0"
+#define OMIS_VERSION_STRING "0.2.0"
 
 /* Limits of every MIS system: techniques combined, channels per sample. */
 #define OMIS_MAX_TECHNIQUES 32
@@ -238,7 +246,12 @@ OMIS_API size_t omisGetEffectPlan(OMISScene scene, const char* techniques, const
  * first; written and sized as omisGetEffectPlan. */
 OMIS_API size_t omisGetTechniqueNames(char* buffer, size_t bufferSize);
 
-/* What a direct-lighting call did. */
+/* A direct-lighting job on a committed scene: set parameters by name, commit,
+ * then execute (any number of times, from several threads at once; the
+ * parameters are read-only after commit). */
+typedef struct OMISDirectLightingImpl* OMISDirectLighting;
+
+/* What one execution did. */
 typedef struct OMISDirectLightingStats {
     uint64_t points;
     uint64_t samples;        /* directions drawn */
@@ -248,29 +261,57 @@ typedef struct OMISDirectLightingStats {
     double seconds;          /* wall-clock time */
 } OMISDirectLightingStats;
 
-/* E_direct/π per RGB channel at `count` shading points of a committed scene
- * (SPEC §3): what Cycles' Diffuse bake with only Direct writes.
+/* The job keeps a reference to the scene, which need not be committed yet. */
+OMIS_API OMISDirectLighting omisNewDirectLighting(OMISScene scene);
+OMIS_API void omisRetainDirectLighting(OMISDirectLighting lighting);
+OMIS_API void omisReleaseDirectLighting(OMISDirectLighting lighting);
+
+/* Parameters, before commit (defaults in brackets). An unknown name, a name
+ * set through the wrong type's function, or a bad value is
+ * OMIS_ERROR_INVALID_ARGUMENT naming the parameter:
+ *   integers: "rounds" [1] R (SPEC §1), 1..2^20; "seed" [0] (the 64 bits as
+ *             uint64): results are a function of the seed only, not of the
+ *             number of threads
+ *   floats:   "beta" [2] power heuristic exponent, > 0; "cutoff" [0.1] cutoff
+ *             heuristic threshold, in [0, 1]
+ *   strings:  "techniques" [""] comma-separated names (SPEC §3), for example
+ *             "bsdf,unoccluded/solid-angle"; "" = the effect plan's default
+ *             techniques and counts; "strategy" ["optimal-direct"] the MIS
+ *             combination by name (omisParseStrategy's names)
+ *   counts:   samples of each named technique per round [1 each], >= 0, one
+ *             per name; only with techniques */
+OMIS_API void omisSetDirectLightingInt(OMISDirectLighting lighting, const char* name,
+                                       int64_t value);
+OMIS_API void omisSetDirectLightingFloat(OMISDirectLighting lighting, const char* name,
+                                         double value);
+OMIS_API void omisSetDirectLightingString(OMISDirectLighting lighting, const char* name,
+                                          const char* value);
+OMIS_API void omisSetDirectLightingCounts(OMISDirectLighting lighting, const int* counts,
+                                          int numCounts);
+/* Called now and then with the fraction done (any thread, see
+ * OMISProgressFunction); returning false cancels the execution. May be set at
+ * any time; an execution uses the function set when it starts. */
+OMIS_API void omisSetDirectLightingProgressFunction(OMISDirectLighting lighting,
+                                                    OMISProgressFunction progress,
+                                                    void* user);
+/* Validates the parameters against the (committed) scene and chooses the
+ * techniques; errors name the parameter. A second commit does nothing. */
+OMIS_API void omisCommitDirectLighting(OMISDirectLighting lighting);
+
+/* E_direct/π per RGB channel at `count` shading points (SPEC §3): what Cycles'
+ * Diffuse bake with only Direct writes.
  *   points, normals: count rows of 3 doubles, tightly packed; normals face the
  *                    side that receives light (normalised here; not zero)
- *   techniques, samples: as above; rounds >= 1 (R, SPEC §1)
- *   strategy, beta, cutoff: the MIS combination (beta: power heuristic,
- *                    default 2; cutoff: cutoff heuristic, default 0.1)
- *   seed:            results are a function of the seed only, not of the
- *                    number of threads
  *   value:           count rows of 3 doubles written: the estimates
  *   variance:        NULL, or count rows of 3 doubles written: their
  *                    estimated variances
  *   stats:           NULL, or filled in (also when cancelled)
- *   progress, user:  NULL, or called now and then (any thread, see
- *                    OMISProgressFunction); returning false cancels
  * Arrays are read/written during the call only. count 0 does nothing and
- * succeeds. Returns false on error or cancellation (outputs then incomplete). */
-OMIS_API bool omisDirectLighting(OMISScene scene, const double* points, const double* normals,
-                                 size_t count, const char* techniques, const int* samples,
-                                 int rounds, OMISStrategy strategy, double beta, double cutoff,
-                                 uint64_t seed, double* value, double* variance,
-                                 OMISDirectLightingStats* stats,
-                                 OMISProgressFunction progress, void* user);
+ * succeeds. Returns false on error or cancellation (OMIS_ERROR_CANCELLED;
+ * outputs then incomplete). */
+OMIS_API bool omisExecuteDirectLighting(OMISDirectLighting lighting, const double* points,
+                                        const double* normals, size_t count, double* value,
+                                        double* variance, OMISDirectLightingStats* stats);
 
 /* ---- Baking (lightmaps and vertex colours) ----------------------------- */
 

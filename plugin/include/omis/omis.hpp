@@ -53,6 +53,8 @@ private:
 
 using EstimatorRef = Ref<OMISEstimator, omisRetainEstimator, omisReleaseEstimator>;
 using SceneRef = Ref<OMISScene, omisRetainScene, omisReleaseScene>;
+using DirectLightingRef =
+    Ref<OMISDirectLighting, omisRetainDirectLighting, omisReleaseDirectLighting>;
 using BakeRef = Ref<OMISBake, omisRetainBake, omisReleaseBake>;
 using BakeResultRef = Ref<OMISBakeResult, omisRetainBakeResult, omisReleaseBakeResult>;
 
