@@ -39,8 +39,7 @@ script_args = U.args
 def floor_scene(size):
     U.reset_scene()
     img = U.make_image("bake", size)
-    ob = U.grid_mesh("Floor", size=4.0, cuts=1)
-    ob.data.materials.append(U.image_material("FloorMat", img))
+    ob = U.image_grid("Floor", img, material="FloorMat", size=4.0, cuts=1)
     return [ob]
 
 

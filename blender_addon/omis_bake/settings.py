@@ -157,36 +157,31 @@ def _output_props():
 
 
 # Shown after a bake; not operator arguments (see README: the bake's statistics).
+# (name, property type, label, description); every default is the type's zero.
+_RESULTS = (
+    ("last_status", StringProperty, "Last Status", "How the last bake ended"),
+    ("last_seconds", FloatProperty, "Last Time", "Seconds the last bake took, end to end"),
+    ("last_samples_per_texel", FloatProperty, "Last Samples per Texel",
+     "Mean samples per baked texel (or corner) of the last bake"),
+    ("last_mean_error", FloatProperty, "Last Mean Error",
+     "Mean over the baked texels of the estimated relative error (standard error / value) "
+     "of the last bake"),
+    ("last_error_p95", FloatProperty, "Last Error (95th percentile)",
+     "95 % of the baked texels had at most this relative error"),
+    ("last_halving_seconds", FloatProperty, "Last Halving Time",
+     "Extra seconds of sampling that would halve the mean error: estimated from the bake's "
+     "measured convergence (passes taken under a time limit or noise threshold), else an "
+     "upper bound from the 1/√time rate"),
+    ("last_halving_measured", BoolProperty, "Last Halving Time Measured",
+     "Whether the halving time comes from the last bake's measured convergence (else it is "
+     "the 1/√time upper bound)"),
+    ("last_plan", StringProperty, "Last Sampling Plan",
+     "The sampling methods and sample counts chosen (the effect plan)"),
+)
+
+
 def _result_props():
-    return {
-        "last_status": StringProperty(name="Last Status", default="",
-                                      description="How the last bake ended"),
-        "last_seconds": FloatProperty(name="Last Time", default=0.0,
-                                      description="Seconds the last bake took, end to end"),
-        "last_samples_per_texel": FloatProperty(
-            name="Last Samples per Texel", default=0.0,
-            description="Mean samples per baked texel (or corner) of the last bake"),
-        "last_mean_error": FloatProperty(
-            name="Last Mean Error", default=0.0,
-            description="Mean over the baked texels of the estimated relative error "
-                        "(standard error / value) of the last bake"),
-        "last_error_p95": FloatProperty(
-            name="Last Error (95th percentile)", default=0.0,
-            description="95 % of the baked texels had at most this relative error"),
-        "last_halving_seconds": FloatProperty(
-            name="Last Halving Time", default=0.0,
-            description="Extra seconds of sampling that would halve the mean error: "
-                        "estimated from the bake's measured convergence (passes taken under "
-                        "a time limit or noise threshold), else an upper bound from the "
-                        "1/√time rate"),
-        "last_halving_measured": BoolProperty(
-            name="Last Halving Time Measured", default=False,
-            description="Whether the halving time comes from the last bake's measured "
-                        "convergence (else it is the 1/√time upper bound)"),
-        "last_plan": StringProperty(name="Last Sampling Plan", default="",
-                                    description="The sampling methods and sample counts "
-                                                "chosen (the effect plan)"),
-    }
+    return {name: kind(name=label, description=text) for name, kind, label, text in _RESULTS}
 
 
 SETTING_NAMES = tuple(_props().keys())

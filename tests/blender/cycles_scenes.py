@@ -13,9 +13,7 @@ SIZE = 64
 
 
 def receiver(image, name="Receiver", **kwargs):
-    ob = U.grid_mesh(name, **kwargs)
-    ob.data.materials.append(U.image_material(name + "Mat", image))
-    return ob
+    return U.image_grid(name, image, material=name + "Mat", **kwargs)
 
 
 def scene_area(size=SIZE):
@@ -39,14 +37,19 @@ def scene_area_round(size=SIZE):
     return objs
 
 
+def _spot(name, radius):
+    """The spot light point_spot and spot_radius share (a 60° cone, tilted)."""
+    U.add_light('SPOT', name, energy=400.0, location=(0.4, 0.3, 1.2),
+                rotation=(U.deg(15), U.deg(-10), 0), spot_size=U.deg(60), spot_blend=0.3,
+                shadow_soft_size=radius)
+
+
 def scene_point_spot(size=SIZE):
     img = U.make_image("bake", size)
     objs = [receiver(img, size=2.0, cuts=2)]
     U.add_light('POINT', "point_radius", energy=150.0, location=(-0.5, -0.5, 1.0),
                 shadow_soft_size=0.2)
-    U.add_light('SPOT', "spot", energy=400.0, location=(0.4, 0.3, 1.2),
-                rotation=(U.deg(15), U.deg(-10), 0), spot_size=U.deg(60), spot_blend=0.3,
-                shadow_soft_size=0.0)
+    _spot("spot", radius=0.0)
     return objs
 
 
@@ -56,9 +59,7 @@ def scene_spot_radius(size=SIZE):
     # the core follows Cycles (the ctest entry is disabled meanwhile).
     img = U.make_image("bake", size)
     objs = [receiver(img, size=2.0, cuts=2)]
-    U.add_light('SPOT', "spot_radius", energy=400.0, location=(0.4, 0.3, 1.2),
-                rotation=(U.deg(15), U.deg(-10), 0), spot_size=U.deg(60), spot_blend=0.3,
-                shadow_soft_size=0.1)
+    _spot("spot_radius", radius=0.1)
     return objs
 
 

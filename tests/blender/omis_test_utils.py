@@ -92,6 +92,13 @@ def grid_mesh(name, size=2.0, cuts=1, location=(0, 0, 0), uv_rect=(0, 0, 1, 1)):
     return ob
 
 
+def image_grid(name, image, material="m", **grid):
+    """grid_mesh(name, **grid) whose material bakes into `image`."""
+    ob = grid_mesh(name, **grid)
+    ob.data.materials.append(image_material(material, image))
+    return ob
+
+
 def add_light(kind, name=None, energy=100.0, location=(0, 0, 1), rotation=(0, 0, 0), **props):
     data = bpy.data.lights.new(name or kind.lower(), kind)
     data.energy = energy

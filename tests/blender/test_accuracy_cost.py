@@ -27,8 +27,7 @@ check = U.check
 def setup():
     U.reset_scene()
     img = U.make_image("acc", 48)
-    ob = U.grid_mesh("Floor", size=2.0, cuts=1)
-    ob.data.materials.append(U.image_material("m", img))
+    ob = U.image_grid("Floor", img, size=2.0, cuts=1)
     # A soft area light and a box casting a penumbra: texels of different noise.
     U.add_light('AREA', "lamp", energy=400.0, location=(0.3, 0.2, 1.2), size=0.8)
     U.add_box("Box", (0.4, 0.4, 0.4), (0.1, 0.0, 0.5))

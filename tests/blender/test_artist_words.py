@@ -126,8 +126,7 @@ def test_every_engine():
     # A bake under EEVEE (omis needs nothing of Cycles).
     U.reset_scene(engine='BLENDER_EEVEE')
     img = U.make_image("eevee", 16)
-    ob = U.grid_mesh("Plane", size=1.0)
-    ob.data.materials.append(U.image_material("m", img))
+    ob = U.image_grid("Plane", img, size=1.0)
     U.add_light('SUN', "sun", energy=2.0)
     U.select_only([ob])
     check(bpy.ops.omis.bake(samples=1) == {'FINISHED'}, "operator under EEVEE")

@@ -39,8 +39,7 @@ def finish(code, message):
 def build_scene():
     U.reset_scene()
     img = U.make_image("shot", 64)
-    ob = U.grid_mesh("Plane", size=1.0, cuts=1)
-    ob.data.materials.append(U.image_material("m", img))
+    ob = U.image_grid("Plane", img, size=1.0, cuts=1)
     U.add_light('AREA', "lamp", energy=200.0, location=(0.2, 0.1, 1.0), size=0.4)
     U.select_only([ob])
 
