@@ -10,13 +10,15 @@
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
-// Flags: --quick (fewer receivers), --only sphere|point|area.
+// Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
+// (only the scenes of N emitters: for profiling one scene).
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <string>
@@ -145,31 +147,37 @@ Row time_scene(const std::string& family, int emitters,
 int main(int argc, char** argv) {
     bool quick = false;
     std::string only;  // --only FAMILY: time one family (for profiling)
+    int only_emitters = 0;  // --emitters N: only scenes of N emitters
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
+        else if (std::strcmp(argv[i], "--emitters") == 0 && i + 1 < argc)
+            only_emitters = std::atoi(argv[++i]);
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N]\n",
+                         argv[0]);
             return 2;
         }
     }
-    const auto wanted = [&](const char* family) { return only.empty() || only == family; };
+    const auto wanted = [&](const char* family, int emitters) {
+        return (only.empty() || only == family) && (!only_emitters || only_emitters == emitters);
+    };
     const int grid = quick ? 12 : 32;
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
     std::vector<Row> rows;
     const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
-    if (wanted("sphere"))
-        for (auto [stacks, slices] : spheres)
+    for (auto [stacks, slices] : spheres)
+        if (wanted("sphere", 2 * slices * (stacks - 1)))
             rows.push_back(time_scene("emissive sphere", 2 * slices * (stacks - 1),
                                       [&](Scene& s) { add_emissive_sphere(s, stacks, slices); },
                                       grid));
-    if (wanted("point"))
-        for (int side : {1, 4, 16, 100})
+    for (int side : {1, 4, 16, 100})
+        if (wanted("point", side * side))
             rows.push_back(time_scene("point lights", side * side,
                                       [&](Scene& s) { add_point_grid(s, side); }, grid));
-    if (wanted("area"))
-        for (int side : {1, 4, 16, 100})
+    for (int side : {1, 4, 16, 100})
+        if (wanted("area", side * side))
             rows.push_back(time_scene("area lights", side * side,
                                       [&](Scene& s) { add_area_grid(s, side); }, grid));
 

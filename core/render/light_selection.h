@@ -53,10 +53,13 @@ public:
         const LightSelector* owner = nullptr;  // one memo per selector
         Vec3 x, n;
         std::uint32_t stamp = 0;
-        std::vector<std::uint32_t> stamps;
-        std::vector<double> first_child;
+        bool root_reaches = false;  // at (x, n)
+        struct Entry {
+            std::uint32_t stamp = 0;  // valid when equal to the memo's stamp
+            double first_child = 0;
+        };
+        std::vector<Entry> nodes;  // per node
     };
-
     // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
     // (tree only: every bound says so).
     std::optional<SelectedLight> sample(const Vec3& x, const Vec3& n, double u,
@@ -110,11 +113,17 @@ private:
     };
     std::uint32_t build(std::vector<Entry>& entries, std::size_t begin, std::size_t end,
                         std::uint64_t trail, int depth);
-    // Probability of taking the first child at an interior node.
+    // Probability of taking the first child at an interior node: ∝ the
+    // children's importance, or ∝ their power where neither child's bounds
+    // reach (x, n) although the parent's did, so that every draw ends at a
+    // light and the pmfs sum to 1.
     double first_child_probability(const Node& node, const Vec3& x, const Vec3& n) const;
     double first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
                                    Memo* memo) const;
-    double tree_probability(const Vec3& x, const Vec3& n) const;
+    // Whether the root's bounds reach (x, n): the tree then takes its share.
+    bool root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const;
+    // Sets the memo to (x, n), forgetting other points.
+    void focus(Memo& memo, const Vec3& x, const Vec3& n) const;
 
     Kind kind_ = Kind::Uniform;
     std::vector<std::uint32_t> ids_;
