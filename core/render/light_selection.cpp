@@ -302,16 +302,16 @@ double LightSelector::first_child_probability(const Node& node, const Vec3& x,
 }
 
 void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
-    if (memo.owner != this || memo.nodes.size() != nodes_.size()) {
+    if (memo.owner != this || memo.slots.empty()) {
         memo.owner = this;
-        memo.nodes.assign(nodes_.size(), Memo::Entry{});
+        memo.slots.assign(Memo::kSlots, Memo::Entry{});
         memo.stamp = 0;
     }
     const bool same = memo.stamp > 0 && memo.x.x == x.x && memo.x.y == x.y &&
                       memo.x.z == x.z && memo.n.x == n.x && memo.n.y == n.y && memo.n.z == n.z;
     if (same) return;
     if (++memo.stamp == 0) {  // wrapped: forget everything
-        std::fill(memo.nodes.begin(), memo.nodes.end(), Memo::Entry{});
+        std::fill(memo.slots.begin(), memo.slots.end(), Memo::Entry{});
         memo.stamp = 1;
     }
     memo.x = x;
@@ -322,11 +322,13 @@ void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
 double LightSelector::first_child_probability(const Node& node, const Vec3& x,
                                               const Vec3& n, Memo* memo) const {
     if (!memo) return first_child_probability(node, x, n);
-    focus(*memo, x, n);
-    Memo::Entry& e = memo->nodes[std::size_t(&node - nodes_.data())];
-    if (e.stamp != memo->stamp) {
-        e.stamp = memo->stamp;
-        e.first_child = first_child_probability(node, x, n);
+    // The memo is focused on (x, n): sample and pmf call root_reaches first.
+    const auto index = std::uint32_t(&node - nodes_.data());
+    // Fibonacci hashing spreads the depth-first indices of one path.
+    Memo::Entry& e = memo->slots[(index * 2654435769u) >> (32 - 11)];
+    static_assert(Memo::kSlots == 1u << 11, "the hash's shift");
+    if (e.stamp != memo->stamp || e.node != index) {
+        e = {index, memo->stamp, first_child_probability(node, x, n)};
     }
     return e.first_child;
 }

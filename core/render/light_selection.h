@@ -47,18 +47,21 @@ public:
     bool may_reach(const Vec3& x, const Vec3& n) const;
     // Scratch memory of one thread that remembers the tree's branching
     // probabilities at one (x, n): the draw and the pmfs evaluated at the
-    // same point then share the work near the root.
+    // same point then share the work near the root. A small direct-mapped
+    // table (it stays in L1/L2 cache; a per-node array of 100k lights would
+    // cost a cache miss per level): a node that collides is recomputed.
     class Memo {
         friend class LightSelector;
+        static constexpr std::size_t kSlots = 2048;  // a power of 2
         const LightSelector* owner = nullptr;  // one memo per selector
         Vec3 x, n;
         std::uint32_t stamp = 0;
         bool root_reaches = false;  // at (x, n)
         struct Entry {
-            std::uint32_t stamp = 0;  // valid when equal to the memo's stamp
+            std::uint32_t node = 0, stamp = 0;  // valid when stamp is the memo's
             double first_child = 0;
         };
-        std::vector<Entry> nodes;  // per node
+        std::vector<Entry> slots;
     };
     // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
     // (tree only: every bound says so).
@@ -118,9 +121,11 @@ private:
     // reach (x, n) although the parent's did, so that every draw ends at a
     // light and the pmfs sum to 1.
     double first_child_probability(const Node& node, const Vec3& x, const Vec3& n) const;
+    // With a memo focused on (x, n) (root_reaches does so).
     double first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
                                    Memo* memo) const;
     // Whether the root's bounds reach (x, n): the tree then takes its share.
+    // Focuses the memo on (x, n).
     bool root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const;
     // Sets the memo to (x, n), forgetting other points.
     void focus(Memo& memo, const Vec3& x, const Vec3& n) const;
