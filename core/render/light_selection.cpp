@@ -241,8 +241,12 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
             // Lights of zero power add nothing and are never drawn.
         }
         trail_.assign(ids_.size(), 0);
-        depth_.assign(ids_.size(), 0);
-        if (!entries.empty()) build(entries, 0, entries.size(), 0, 0);
+        if (!entries.empty()) {
+            build(entries, 0, entries.size(), 0);
+            root_ = nodes_[0].bounds;
+            collapse(0, 0, 0);
+        }
+        nodes_ = {};
         build_bounds_ = {};
     }
 }
@@ -251,7 +255,7 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
 // centroid along the widest axis of the centroids: a balanced tree of depth
 // ⌈log2 L⌉; the triangles of one mesh stay together in their own subtrees.
 std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begin,
-                                   std::size_t end, std::uint64_t trail, int depth) {
+                                   std::size_t end, int depth) {
     if (depth >= 64) throw std::length_error("light tree: deeper than 64 levels");
     const std::uint32_t index = std::uint32_t(nodes_.size());
     nodes_.emplace_back();
@@ -260,9 +264,6 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
         build_bounds_[index] = entries[begin].bounds;
         nodes_[index].bounds = PackedBounds(entries[begin].bounds);
         nodes_[index].light = entries[begin].light;
-        const std::int64_t slot = slot_[entries[begin].light];
-        trail_[slot] = trail;
-        depth_[slot] = std::uint8_t(depth);
         return index;
     }
     Vec3 lo = (entries[begin].bounds.lo + entries[begin].bounds.hi) * 0.5, hi = lo;
@@ -279,9 +280,8 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
                          return a.bounds.lo[axis] + a.bounds.hi[axis] <
                                 b.bounds.lo[axis] + b.bounds.hi[axis];
                      });
-    const std::uint32_t first = build(entries, begin, mid, trail, depth + 1);
-    const std::uint32_t second =
-        build(entries, mid, end, trail | (std::uint64_t(1) << depth), depth + 1);
+    const std::uint32_t first = build(entries, begin, mid, depth + 1);
+    const std::uint32_t second = build(entries, mid, end, depth + 1);
     nodes_[index].second_child = second;
     Bounds& b = build_bounds_[index];
     b = merge(build_bounds_[first], build_bounds_[second]);
@@ -290,15 +290,54 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
     return index;
 }
 
-double LightSelector::first_child_probability(const Node& node, const Vec3& x,
-                                              const Vec3& n) const {
-    const PackedBounds& first = nodes_[&node - nodes_.data() + 1].bounds;
-    const PackedBounds& second = nodes_[node.second_child].bounds;
-    const double a = first.importance(x, n), b = second.importance(x, n);
-    if (a + b > 0) return a / (a + b);
-    // The parent's looser bounds reached (x, n) but neither child's do: no
-    // light below can add anything; split by power (both are positive).
-    return double(first.power) / (double(first.power) + double(second.power));
+// The wide node of binary node `binary`: its children's children (a child
+// that is a leaf stays itself). `trail` holds the choices down to here.
+std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail, int depth) {
+    if (depth >= 32) throw std::length_error("light tree: deeper than 32 wide levels");
+    const std::uint32_t index = std::uint32_t(wide_.size());
+    wide_.emplace_back();
+    std::uint32_t members[kWidth];
+    int count = 0;
+    if (nodes_[binary].light != ~0u) {
+        members[count++] = binary;  // a tree of one light
+    } else {
+        for (std::uint32_t child : {binary + 1, nodes_[binary].second_child}) {
+            if (nodes_[child].light != ~0u) {
+                members[count++] = child;
+            } else {
+                members[count++] = child + 1;
+                members[count++] = nodes_[child].second_child;
+            }
+        }
+    }
+    for (int i = 0; i < count; ++i) {
+        const Node& member = nodes_[members[i]];
+        const std::uint64_t path = trail | (std::uint64_t(i) << (2 * depth));
+        wide_[index].child[i] = member.bounds;
+        if (member.light != ~0u) {
+            wide_[index].index[i] = member.light;
+            wide_[index].is_leaf |= std::uint8_t(1u << i);
+            trail_[std::size_t(slot_[member.light])] = path;
+        } else {
+            const std::uint32_t below = collapse(members[i], path, depth + 1);
+            wide_[index].index[i] = below;  // wide_ may have moved: index anew
+        }
+    }
+    wide_[index].count = std::uint8_t(count);
+    return index;
+}
+
+void LightSelector::child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
+                                        double p[kWidth]) const {
+    double total = 0;
+    for (int i = 0; i < node.count; ++i) total += p[i] = node.child[i].importance(x, n);
+    if (!(total > 0)) {
+        // The parent's looser bounds reached (x, n) but no child's do: no
+        // light below can add anything; split by power (all are positive).
+        total = 0;
+        for (int i = 0; i < node.count; ++i) total += p[i] = double(node.child[i].power);
+    }
+    for (int i = 0; i < node.count; ++i) p[i] /= total;
 }
 
 void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
@@ -316,26 +355,32 @@ void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
     }
     memo.x = x;
     memo.n = n;
-    memo.root_reaches = !nodes_.empty() && nodes_[0].bounds.importance(x, n) > 0;
+    memo.root_reaches = !wide_.empty() && root_.importance(x, n) > 0;
 }
 
-double LightSelector::first_child_probability(const Node& node, const Vec3& x,
-                                              const Vec3& n, Memo* memo) const {
-    if (!memo) return first_child_probability(node, x, n);
-    // The memo is focused on (x, n): sample and pmf call root_reaches first.
-    const auto index = std::uint32_t(&node - nodes_.data());
-    // Fibonacci hashing spreads the depth-first indices of one path.
-    Memo::Entry& e = memo->slots[(index * 2654435769u) >> (32 - 11)];
-    static_assert(Memo::kSlots == 1u << 11, "the hash's shift");
-    if (e.stamp != memo->stamp || e.node != index) {
-        e = {index, memo->stamp, first_child_probability(node, x, n)};
+const double* LightSelector::child_probabilities(const WideNode& node, const Vec3& x,
+                                                 const Vec3& n, Memo* memo,
+                                                 double scratch[kWidth]) const {
+    if (!memo) {
+        child_probabilities(node, x, n, scratch);
+        return scratch;
     }
-    return e.first_child;
+    // The memo is focused on (x, n): sample and pmf call root_reaches first.
+    const auto index = std::uint32_t(&node - wide_.data());
+    // Fibonacci hashing spreads the depth-first indices of one path.
+    static_assert(Memo::kSlots == 1u << 11, "the hash's shift");
+    Memo::Entry& e = memo->slots[(index * 2654435769u) >> (32 - 11)];
+    if (e.stamp != memo->stamp || e.node != index) {
+        e.node = index;
+        e.stamp = memo->stamp;
+        child_probabilities(node, x, n, e.p);
+    }
+    return e.p;
 }
 
 bool LightSelector::root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const {
-    if (nodes_.empty()) return false;
-    if (!memo) return nodes_[0].bounds.importance(x, n) > 0;
+    if (wide_.empty()) return false;
+    if (!memo) return root_.importance(x, n) > 0;
     focus(*memo, x, n);
     return memo->root_reaches;
 }
@@ -367,21 +412,24 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     if (pick < unbounded_.size()) return SelectedLight{unbounded_[pick], 1.0 / double(choices)};
     double pmf = 1.0 / double(choices);
     u = std::min(u * double(choices) - double(pick), std::nextafter(1.0, 0.0));
-    const Node* node = &nodes_[0];
-    while (node->light == ~0u) {
-        const double p = first_child_probability(*node, x, n, memo);
-        if (u < p) {
-            u = std::min(u / p, std::nextafter(1.0, 0.0));
-            pmf *= p;
-            node = node + 1;
-        } else {
-            u = std::min((u - p) / (1 - p), std::nextafter(1.0, 0.0));
-            pmf *= 1 - p;
-            node = &nodes_[node->second_child];
+    const WideNode* node = &wide_[0];
+    double scratch[kWidth];
+    for (;;) {
+        const double* p = child_probabilities(*node, x, n, memo, scratch);
+        // The child whose share of [0, 1) holds u; rounding past the last
+        // share falls to the last child that has one.
+        int i = 0;
+        double below = 0;
+        while (i + 1 < node->count && !(u < below + p[i] && p[i] > 0)) below += p[i++];
+        while (!(p[i] > 0) && i > 0) below -= p[--i];
+        u = std::clamp((u - below) / p[i], 0.0, std::nextafter(1.0, 0.0));
+        pmf *= p[i];
+        if (node->is_leaf & (1u << i)) {
+            if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
+            return SelectedLight{node->index[i], pmf};
         }
+        node = &wide_[node->index[i]];
     }
-    if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
-    return SelectedLight{node->light, pmf};
 }
 
 double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
@@ -396,19 +444,16 @@ double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
         return 1.0 / double(choices);
     if (!tree) return 0;
     double pmf = 1.0 / double(choices);
-    const Node* node = &nodes_[0];
-    for (int level = 0; pmf > 0 && node->light == ~0u; ++level) {
-        const double p = first_child_probability(*node, x, n, memo);
-        if ((trail_[slot] >> level) & 1) {
-            pmf *= 1 - p;
-            node = &nodes_[node->second_child];
-        } else {
-            pmf *= p;
-            node = node + 1;
-        }
+    const WideNode* node = &wide_[0];
+    double scratch[kWidth];
+    for (int level = 0; pmf > 0; ++level) {
+        const int i = int((trail_[slot] >> (2 * level)) & 3);
+        if (i >= node->count) return 0;  // a light of zero power: not in the tree
+        pmf *= child_probabilities(*node, x, n, memo, scratch)[i];
+        if (node->is_leaf & (1u << i)) return node->index[i] == light ? pmf : 0.0;
+        node = &wide_[node->index[i]];
     }
-    // A light of zero power is not in the tree: reaching another leaf means 0.
-    return node->light == light ? pmf : 0.0;
+    return 0;
 }
 
 }  // namespace omis

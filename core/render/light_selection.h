@@ -59,7 +59,7 @@ public:
         bool root_reaches = false;  // at (x, n)
         struct Entry {
             std::uint32_t node = 0, stamp = 0;  // valid when stamp is the memo's
-            double first_child = 0;
+            double p[4] = {};                   // child probabilities
         };
         std::vector<Entry> slots;
     };
@@ -95,8 +95,7 @@ public:
 
 private:
     // Bounds in single precision, rounded so that they only grow (a wider
-    // box and cones): a node fits one cache line, which is what a draw among
-    // 100k lights waits for.
+    // box and cones): 48 bytes, as a draw among 100k lights waits for memory.
     struct PackedBounds {
         float centre[3] = {}, radius = 0, power = 0, axis[3] = {}, cos_theta_o = 1,
               sin_theta_o = 0, cos_theta_e = 1;
@@ -105,6 +104,7 @@ private:
         explicit PackedBounds(const Bounds& b);
         double importance(const Vec3& x, const Vec3& n) const;
     };
+    // The binary tree as built (then collapsed into wide nodes).
     struct Node {
         PackedBounds bounds;
         std::uint32_t second_child = 0;  // interior: first child is the next node
@@ -115,15 +115,26 @@ private:
         std::uint32_t light;
     };
     std::uint32_t build(std::vector<Entry>& entries, std::size_t begin, std::size_t end,
-                        std::uint64_t trail, int depth);
-    // Probability of taking the first child at an interior node: ∝ the
-    // children's importance, or ∝ their power where neither child's bounds
-    // reach (x, n) although the parent's did, so that every draw ends at a
-    // light and the pmfs sum to 1.
-    double first_child_probability(const Node& node, const Vec3& x, const Vec3& n) const;
-    // With a memo focused on (x, n) (root_reaches does so).
-    double first_child_probability(const Node& node, const Vec3& x, const Vec3& n,
-                                   Memo* memo) const;
+                        int depth);
+    // Up to four children (two levels of the binary tree) side by side: a
+    // step down reads one contiguous block and evaluates four independent
+    // importances, and a draw among 100k lights takes 9 steps instead of 17.
+    static constexpr int kWidth = 4;
+    struct WideNode {
+        PackedBounds child[kWidth];
+        std::uint32_t index[kWidth] = {};  // wide node, or light id where is_leaf
+        std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
+    };
+    std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
+    // The probability of each child of a wide node: ∝ the children's
+    // importance, or ∝ their power where none's bounds reach (x, n) although
+    // the parent's did, so that every draw ends at a light and the pmfs sum
+    // to 1.
+    void child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
+                             double p[kWidth]) const;
+    // The same through a memo focused on (x, n) (root_reaches does so).
+    const double* child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
+                                      Memo* memo, double scratch[kWidth]) const;
     // Whether the root's bounds reach (x, n): the tree then takes its share.
     // Focuses the memo on (x, n).
     bool root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const;
@@ -136,11 +147,12 @@ private:
     std::vector<double> cdf_;         // Power: cumulative over ids_
     std::vector<double> probability_; // Power: per index in ids_
     // Tree
-    std::vector<Node> nodes_;
-    std::vector<Bounds> build_bounds_;  // per node, while building
+    std::vector<Node> nodes_;           // binary, while building
+    std::vector<Bounds> build_bounds_;  // per binary node, while building
+    std::vector<WideNode> wide_;        // the root first
+    PackedBounds root_;
     std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
-    std::vector<std::uint64_t> trail_;      // per slot: child choices, root first (bit set: second)
-    std::vector<std::uint8_t> depth_;       // per slot
+    std::vector<std::uint64_t> trail_;  // per slot: child choices, root first, 2 bits each
 };
 
 }  // namespace omis
