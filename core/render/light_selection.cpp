@@ -204,12 +204,12 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
 
 LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
                              const std::vector<std::uint32_t>& ids, double scene_radius)
-    : kind_(kind), ids_(ids), slot_(lights.size(), -1) {
-    for (std::size_t i = 0; i < ids_.size(); ++i) {
-        if (ids_[i] >= lights.size() || slot_[ids_[i]] >= 0)
-            throw std::invalid_argument("ids: light " + std::to_string(ids_[i]) +
+    : kind_(kind), ids_(ids), per_light_(lights.size()) {
+    for (std::uint32_t id : ids_) {
+        if (id >= lights.size() || per_light_[id].role != PerLight::Absent)
+            throw std::invalid_argument("ids: light " + std::to_string(id) +
                                         " is out of range or repeated");
-        slot_[ids_[i]] = std::int64_t(i);
+        per_light_[id].role = PerLight::Selected;
     }
     if (kind_ == Kind::Power) {
         double largest = 0;
@@ -225,9 +225,9 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
             total += w;
         }
         double running = 0;
-        for (double& w : probability_) {
-            w /= total;
-            running += w;
+        for (std::size_t i = 0; i < ids_.size(); ++i) {
+            per_light_[ids_[i]].probability = probability_[i] /= total;
+            running += probability_[i];
             cdf_.push_back(running);
         }
         if (!cdf_.empty()) cdf_.back() = 1.0;
@@ -236,11 +236,13 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
         std::vector<Entry> entries;
         for (std::uint32_t id : ids_) {
             const auto b = bounds_of(lights[id], scene_radius);
-            if (!b) unbounded_.push_back(id);
+            if (!b) {
+                unbounded_.push_back(id);
+                per_light_[id].role = PerLight::Unbounded;
+            }
             else if (b->power > 0) entries.push_back({*b, id});
             // Lights of zero power add nothing and are never drawn.
         }
-        trail_.assign(ids_.size(), 0);
         if (!entries.empty()) {
             build(entries, 0, entries.size(), 0);
             root_ = nodes_[0].bounds;
@@ -317,7 +319,7 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
         if (member.light != ~0u) {
             wide_[index].index[i] = member.light;
             wide_[index].is_leaf |= std::uint8_t(1u << i);
-            trail_[std::size_t(slot_[member.light])] = path;
+            per_light_[member.light].trail = path;
         } else {
             const std::uint32_t below = collapse(members[i], path, depth + 1);
             wide_[index].index[i] = below;  // wide_ may have moved: index anew
@@ -434,20 +436,20 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
 
 double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
                           Memo* memo) const {
-    if (light >= slot_.size() || slot_[light] < 0) return 0;
-    const std::size_t slot = std::size_t(slot_[light]);
+    if (light >= per_light_.size()) return 0;
+    const PerLight& l = per_light_[light];
+    if (l.role == PerLight::Absent) return 0;
     if (kind_ == Kind::Uniform) return 1.0 / double(ids_.size());
-    if (kind_ == Kind::Power) return probability_[slot];
+    if (kind_ == Kind::Power) return l.probability;
     const bool tree = root_reaches(x, n, memo);
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
-    if (std::find(unbounded_.begin(), unbounded_.end(), light) != unbounded_.end())
-        return 1.0 / double(choices);
+    if (l.role == PerLight::Unbounded) return 1.0 / double(choices);
     if (!tree) return 0;
     double pmf = 1.0 / double(choices);
     const WideNode* node = &wide_[0];
     double scratch[kWidth];
     for (int level = 0; pmf > 0; ++level) {
-        const int i = int((trail_[slot] >> (2 * level)) & 3);
+        const int i = int((l.trail >> (2 * level)) & 3);
         if (i >= node->count) return 0;  // a light of zero power: not in the tree
         pmf *= child_probabilities(*node, x, n, memo, scratch)[i];
         if (node->is_leaf & (1u << i)) return node->index[i] == light ? pmf : 0.0;
