@@ -121,9 +121,18 @@ private:
     // importances, and a draw among 100k lights takes 9 steps instead of 17.
     static constexpr int kWidth = 4;
     struct WideNode {
-        PackedBounds child[kWidth];
+        // The children's PackedBounds field by field, one lane each, so that
+        // importance() evaluates the four at once.
+        float cx[kWidth] = {}, cy[kWidth] = {}, cz[kWidth] = {}, radius[kWidth] = {},
+              power[kWidth] = {}, ax[kWidth] = {}, ay[kWidth] = {}, az[kWidth] = {},
+              cos_theta_o[kWidth] = {}, sin_theta_o[kWidth] = {}, cos_theta_e[kWidth] = {},
+              two_sided[kWidth] = {};  // 1 or 0
         std::uint32_t index[kWidth] = {};  // wide node, or light id where is_leaf
         std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
+        void set(int i, const PackedBounds& b);
+        // PackedBounds::importance of each child in single precision (0 past
+        // count, and never 0 where a child's bounds reach (x, n)).
+        void importance(const Vec3& x, const Vec3& n, float out[kWidth]) const;
     };
     std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
     // The probability of each child of a wide node: ∝ the children's
