@@ -429,6 +429,7 @@ void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
     }
     memo.x = x;
     memo.n = n;
+    memo.drawn = ~0u;
     memo.root_reaches = !wide_.empty() && root_.importance(x, n) > 0;
 }
 
@@ -500,6 +501,7 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
         pmf *= p[i];
         if (node->is_leaf & (1u << i)) {
             if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
+            if (memo) memo->drawn = node->index[i], memo->drawn_pmf = pmf;
             return SelectedLight{node->index[i], pmf};
         }
         node = &wide_[node->index[i]];
@@ -517,6 +519,7 @@ double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
     if (l.role == PerLight::Unbounded) return 1.0 / double(choices);
     if (!tree) return 0;
+    if (memo && memo->drawn == light) return memo->drawn_pmf;  // the same product
     double pmf = 1.0 / double(choices);
     const WideNode* node = &wide_[0];
     double scratch[kWidth];

@@ -57,6 +57,10 @@ public:
         Vec3 x, n;
         std::uint32_t stamp = 0;
         bool root_reaches = false;  // at (x, n)
+        // The last light drawn from the tree at (x, n), whose pmf the
+        // technique pdfs ask for next.
+        std::uint32_t drawn = ~0u;
+        double drawn_pmf = 0;
         struct Entry {
             std::uint32_t node = 0, stamp = 0;  // valid when stamp is the memo's
             double p[4] = {};                   // child probabilities
