@@ -56,7 +56,6 @@ void EmitterShapes::commit() {
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     // An all-hits query cannot stop at the first hit: it visits every node
     // the ray crosses, so a tighter (SAH with spatial splits) tree pays.
-    rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
     const std::size_t triangles = light_of_.size();
     RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -71,7 +70,7 @@ void EmitterShapes::commit() {
     std::copy(vertices_.begin(), vertices_.end(), vb);
     for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
     rtcSetGeometryOccludedFilterFunction(geom, collect);
-    rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);
+
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
