@@ -54,8 +54,6 @@ void EmitterShapes::commit() {
     if (empty()) return;
     scene_ = rtcNewScene(device_->handle());
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
-    // An all-hits query cannot stop at the first hit: it visits every node
-    // the ray crosses, so a tighter (SAH with spatial splits) tree pays.
     const std::size_t triangles = light_of_.size();
     RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
@@ -70,7 +68,6 @@ void EmitterShapes::commit() {
     std::copy(vertices_.begin(), vertices_.end(), vb);
     for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
     rtcSetGeometryOccludedFilterFunction(geom, collect);
-
     rtcCommitGeometry(geom);
     rtcAttachGeometry(scene_, geom);
     rtcReleaseGeometry(geom);
