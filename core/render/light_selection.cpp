@@ -374,7 +374,14 @@ F4 min4(F4 a, F4 b) { return a < b ? a : b; }
 void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n,
                                          float out[kWidth]) const {
     const F4 power4 = load(power), r = load(radius), r2 = r * r;
-    const F4 dx = splat(x.x) - load(cx), dy = splat(x.y) - load(cy), dz = splat(x.z) - load(cz);
+    // x − centre in double, then rounded: x itself in float could be off by
+    // more than a small light's radius far from the origin.
+    F4 dx, dy, dz;
+    for (int i = 0; i < kWidth; ++i) {
+        dx[i] = float(x.x - double(cx[i]));
+        dy[i] = float(x.y - double(cy[i]));
+        dz[i] = float(x.z - double(cz[i]));
+    }
     const F4 dist2 = dx * dx + dy * dy + dz * dz;
     const F4 inv_dist = 1.0f / sqrt4(dist2);
     const F4 wx = dx * inv_dist, wy = dy * inv_dist, wz = dz * inv_dist;

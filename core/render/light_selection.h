@@ -11,8 +11,11 @@
 //            BVHLightSampler; Cycles 3.5's light tree): a BVH over the bounded
 //            lights whose nodes bound position, power and the cone of emission
 //            normals; each step down picks a child ∝ a conservative estimate of
-//            its contribution at (x, n). Unbounded lights (sun, world) are
-//            picked uniformly beside the tree.
+//            its contribution at (x, n). Built binary (median splits), stored
+//            4-wide (two binary levels per node). Every draw ends at a light:
+//            the pmfs sum to 1 wherever the tree can reach (x, n).
+//            Unbounded lights (sun, world) are picked uniformly beside the
+//            tree.
 #pragma once
 
 #include <cstdint>

@@ -135,3 +135,40 @@ TEST_CASE("light tree pmfs sum to 1 and match drawing frequencies among many lig
         CHECK(checked_draws >= 4);
     }
 }
+
+TEST_CASE("the light tree keeps every reaching light of a tiny cluster far from the origin",
+          "[selection]") {
+    // Triangles of 1–5 mm, 100 km from the origin, seen from 1–10 cm: single
+    // precision there (x itself would round by up to 4 mm) must not cull a
+    // light that reaches.
+    const Vec3 far(1e5, -1e5, 1e5);
+    Pcg32 rng(8, 3);
+    std::vector<Light> lights;
+    for (int i = 0; i < 400; ++i) {
+        const Vec3 c = far + Vec3(rng.next_double(), rng.next_double(), rng.next_double()) * 0.05;
+        const Frame f(random_direction(rng));
+        const double size = 0.001 + 0.004 * rng.next_double();
+        lights.push_back(make_triangle_light(c, c + f.to_world(Vec3(size, 0, 0)),
+                                             c + f.to_world(Vec3(0, size, 0)), Vec3(1, 1, 1),
+                                             false));
+    }
+    const LightSelector s(LightSelector::Kind::Tree, lights, all_ids(lights.size()), 10.0);
+    int reaching = 0;
+    for (int p = 0; p < 100; ++p) {
+        const Vec3 x = far + Vec3(0.025, 0.025, 0.025) +
+                       random_direction(rng) * (0.01 + 0.09 * rng.next_double());
+        const Vec3 n = random_direction(rng);
+        double total = 0;
+        for (std::uint32_t l = 0; l < lights.size(); ++l) {
+            const double pmf = s.pmf(x, n, l);
+            total += pmf;
+            if (unoccluded_irradiance(lights[l], x, n) > 0) {
+                ++reaching;
+                INFO("point " << p << " light " << l);
+                CHECK(pmf > 0);
+            }
+        }
+        if (s.may_reach(x, n)) CHECK(total == Approx(1.0).epsilon(1e-12));
+    }
+    CHECK(reaching > 1000);
+}
