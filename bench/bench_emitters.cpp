@@ -2,23 +2,29 @@
 // emitters grows — an emissive UV sphere from 16 to ~100k triangles, grids of
 // 1 to 10k point lights and of 1 to 10k small area lights — each over a floor
 // of 32×32 receivers, with the effect plan's default techniques (which switch
-// to the light tree and to drawn delta lights past 64 emitters).
+// to the light tree past 16 integrated emitters and to drawn delta lights
+// past 64).
 //
-// One thread (the machine is shared; a per-sample cost is what is compared),
-// every scene timed in the same run, the fastest of 3 repetitions of shading
-// every receiver; the one-off setup (light tree, tables) is shown apart. The last
+// One thread, its CPU time (the machine is shared; a per-sample cost is what
+// is compared),
+// every scene timed in the same run, the fastest of 5 repetitions of shading
+// every receiver (interleaved over the scenes); the one-off setup (light
+// tree, tables) is shown apart. The last
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
-// Flags: --quick (fewer receivers), --only sphere|point|area.
+// Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
+// (only the scenes of N emitters: for profiling one scene).
 #include <tbb/global_control.h>
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -84,94 +90,108 @@ void add_area_grid(Scene& scene, int side) {
         }
 }
 
-struct Row {
-    std::string family;
-    int emitters;
-    std::string techniques;
-    double us_per_sample;
-    double setup_ms;
-};
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+// CPU time of this thread (s): on the shared machine, time spent waiting for
+// a core is not the code's.
+double cpu_seconds() {
+    timespec t;
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
-Row time_scene(const std::string& family, int emitters,
-               const std::function<void(Scene&)>& build, int grid) {
+// One scene ready to shade: its lighting context (the light tree is built
+// here, once per bake) and a shader, over a grid × grid floor of receivers.
+struct Timed {
+    std::string family, techniques;
+    int emitters = 0;
     Scene scene;
-    add_floor(scene);
-    build(scene);
-    scene.commit();
-    DirectLightingSettings s;
-    default_techniques(scene, s.techniques, s.samples);
-    s.rounds = 4;
-    std::vector<double> points, normals;
-    for (int j = 0; j < grid; ++j)
-        for (int i = 0; i < grid; ++i) {
-            points.insert(points.end(), {-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0});
-            normals.insert(normals.end(), {0.0, 0.0, 1.0});
-        }
-    const std::size_t count = points.size() / 3;
-    // The per-sample cost: one context (the light tree is built here, once
-    // per bake), then shading alone, fastest of 3 repetitions.
-    const auto t0 = std::chrono::steady_clock::now();
-    const LightingContext context(scene, s);
-    const double setup = seconds_since(t0);
-    PointLighting shader(context);
-    double best = 1e300, value[3], variance[3];
-    for (int rep = 0; rep < 3; ++rep) {
-        const auto start = std::chrono::steady_clock::now();
-        for (std::size_t i = 0; i < count; ++i) {
-            const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
-            const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            shader.shade(i, 0, s.rounds, x, n, n, value, variance);
-        }
-        best = std::min(best, seconds_since(start));
+    DirectLightingSettings settings;
+    std::unique_ptr<LightingContext> context;
+    std::unique_ptr<PointLighting> shader;
+    std::vector<Vec3> points;
+    double setup_ms = 0, best = 1e300;  // best: fastest shading of every receiver (s)
+
+    Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
+          int grid)
+        : family(std::move(family_)), emitters(emitters_) {
+        add_floor(scene);
+        build(scene);
+        scene.commit();
+        default_techniques(scene, settings.techniques, settings.samples);
+        settings.rounds = 4;
+        for (int j = 0; j < grid; ++j)
+            for (int i = 0; i < grid; ++i)
+                points.emplace_back(-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0);
+        const double t0 = cpu_seconds();
+        context = std::make_unique<LightingContext>(scene, settings);
+        setup_ms = 1e3 * (cpu_seconds() - t0);
+        shader = std::make_unique<PointLighting>(*context);
+        for (const Technique& t : settings.techniques)
+            techniques += (techniques.empty() ? "" : "+") + t.name();
+        if (techniques.empty()) techniques = "(delta only)";
     }
-    // Texel-samples per point: the MIS samples; in delta-only scenes, one per
-    // round (a round draws one delta light, or loops over few).
-    int per_point = 0;
-    for (int n : s.samples) per_point += n * s.rounds;
-    if (per_point == 0) per_point = s.rounds;
-    const double texel_samples = double(count) * per_point;
-    std::string names;
-    for (const Technique& t : s.techniques) names += (names.empty() ? "" : "+") + t.name();
-    if (names.empty()) names = "(delta only)";
-    return {family, emitters, names, 1e6 * best / texel_samples, 1e3 * setup};
-}
+
+    void shade_all() {
+        double value[3], variance[3];
+        const Vec3 n(0, 0, 1);
+        const double start = cpu_seconds();
+        for (std::size_t i = 0; i < points.size(); ++i)
+            shader->shade(i, 0, settings.rounds, points[i], n, n, value, variance);
+        best = std::min(best, cpu_seconds() - start);
+    }
+
+    double us_per_sample() const {
+        // Texel-samples per point: the MIS samples; in delta-only scenes, one
+        // per round (a round draws one delta light, or loops over few).
+        int per_point = 0;
+        for (int c : settings.samples) per_point += c * settings.rounds;
+        if (per_point == 0) per_point = settings.rounds;
+        return 1e6 * best / (double(points.size()) * per_point);
+    }
+};
 
 }  // namespace
 
 int main(int argc, char** argv) {
     bool quick = false;
     std::string only;  // --only FAMILY: time one family (for profiling)
+    int only_emitters = 0;  // --emitters N: only scenes of N emitters
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
+        else if (std::strcmp(argv[i], "--emitters") == 0 && i + 1 < argc)
+            only_emitters = std::atoi(argv[++i]);
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area]\n", argv[0]);
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N]\n",
+                         argv[0]);
             return 2;
         }
     }
-    const auto wanted = [&](const char* family) { return only.empty() || only == family; };
+    const auto wanted = [&](const char* family, int emitters) {
+        return (only.empty() || only == family) && (!only_emitters || only_emitters == emitters);
+    };
     const int grid = quick ? 12 : 32;
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
-    std::vector<Row> rows;
+    std::vector<std::unique_ptr<Timed>> scenes;
     const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
-    if (wanted("sphere"))
-        for (auto [stacks, slices] : spheres)
-            rows.push_back(time_scene("emissive sphere", 2 * slices * (stacks - 1),
-                                      [&](Scene& s) { add_emissive_sphere(s, stacks, slices); },
-                                      grid));
-    if (wanted("point"))
-        for (int side : {1, 4, 16, 100})
-            rows.push_back(time_scene("point lights", side * side,
-                                      [&](Scene& s) { add_point_grid(s, side); }, grid));
-    if (wanted("area"))
-        for (int side : {1, 4, 16, 100})
-            rows.push_back(time_scene("area lights", side * side,
-                                      [&](Scene& s) { add_area_grid(s, side); }, grid));
+    for (auto [stacks, slices] : spheres)
+        if (wanted("sphere", 2 * slices * (stacks - 1)))
+            scenes.push_back(std::make_unique<Timed>(
+                "emissive sphere", 2 * slices * (stacks - 1),
+                [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid));
+    for (int side : {1, 4, 16, 100})
+        if (wanted("point", side * side))
+            scenes.push_back(std::make_unique<Timed>(
+                "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid));
+    for (int side : {1, 4, 16, 100})
+        if (wanted("area", side * side))
+            scenes.push_back(std::make_unique<Timed>(
+                "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid));
+    // Repetitions interleaved over the scenes, the fastest of each kept: a
+    // burst of load on the shared machine then slows one repetition of every
+    // scene alike rather than all of one scene.
+    for (int rep = 0; rep < 5; ++rep)
+        for (auto& t : scenes) t->shade_all();
 
     std::printf("time per texel-sample, one thread, %d receivers, 4 rounds of the default techniques\n",
                 grid * grid);
@@ -179,13 +199,14 @@ int main(int argc, char** argv) {
                 "setup ms", "techniques");
     double base = 0;
     std::string family;
-    for (const Row& r : rows) {
-        if (r.family != family) {
-            family = r.family;
-            base = r.us_per_sample;
+    for (const auto& t : scenes) {
+        if (t->family != family) {
+            family = t->family;
+            base = t->us_per_sample();
         }
-        std::printf("%-16s %9d %12.3f %7.2fx %9.2f  %s\n", r.family.c_str(), r.emitters,
-                    r.us_per_sample, r.us_per_sample / base, r.setup_ms, r.techniques.c_str());
+        std::printf("%-16s %9d %12.3f %7.2fx %9.2f  %s\n", t->family.c_str(), t->emitters,
+                    t->us_per_sample(), t->us_per_sample() / base, t->setup_ms,
+                    t->techniques.c_str());
     }
     return 0;
 }

@@ -12,7 +12,7 @@ grid over [−2, 2]² at 1 m of point lights or of 5 cm area lights facing down
 Per scene and renderer, the operator's time is fitted as t0 + k·spp from two
 bakes (Cycles: 2 and 32 spp; omis: 4 and 64 samples per texel, the effect
 plan's techniques, balance heuristic); k / texels is the time per
-texel-sample. Cycles' Diffuse bake, DIRECT only, margin 0; omis through the
+texel-sample, in elapsed time and in the process's CPU time (all threads). Cycles' Diffuse bake, DIRECT only, margin 0; omis through the
 add-on's BakeJob (both timed as in bench/bench_cycles.py).
 """
 
@@ -78,15 +78,20 @@ def grid(kind, side):
 
 
 def per_sample(run, lo, hi):
-    """Seconds per texel-sample from two runs; run(n) -> (seconds, samples per texel)."""
+    """(wall, CPU) seconds per texel-sample from two runs; run(n) -> (wall, CPU,
+    samples per texel). CPU is the Blender process's time over all its threads:
+    on the shared machine, waiting for a core is no renderer's cost."""
     run(1)  # warm-up
-    (t_lo, s_lo), (t_hi, s_hi) = run(lo), run(hi)
-    return max((t_hi - t_lo) / max(s_hi - s_lo, 1e-9), 1e-12)
+    (w_lo, c_lo, s_lo), (w_hi, c_hi, s_hi) = run(lo), run(hi)
+    ds = max(s_hi - s_lo, 1e-9)
+    return max((w_hi - w_lo) / ds, 1e-12), max((c_hi - c_lo) / ds, 1e-12)
 
 
 def cycles(objects):
     def run(spp):
-        return U.cycles_bake(objects, spp, 7), spp
+        cpu = time.process_time()
+        wall = U.cycles_bake(objects, spp, 7)
+        return wall, time.process_time() - cpu, spp
     return run
 
 
@@ -97,12 +102,13 @@ def omis(objects):
         overrides = {"samples": int(n), "time_budget": 0.0, "margin": 0, "seed": 7,
                      "use_noise_target": False, "technique_mode": 'AUTO', "use_clear": True,
                      "use_optimal_mis": False, "heuristic": 'BALANCE'}
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         job = BakeJob(bpy.context, objects, settings_from(bpy.context.scene.omis, overrides))
         job.run()
         stats = job.finish(bpy.context)
         # Delta-only scenes draw no MIS samples: count the requested ones.
-        return time.perf_counter() - start, stats["samples_per_texel"] or n
+        return (time.perf_counter() - start, time.process_time() - cpu,
+                stats["samples_per_texel"] or n)
     return run
 
 
@@ -124,15 +130,18 @@ def main():
                 scenes.append((f"{kind} lights", side * side, grid(kind, side)))
     texels = args.size * args.size
     log(f"time per texel-sample (µs), {texels} texels; omis: balance, the plan's techniques")
-    log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}")
+    log("wall: elapsed; CPU: the process's CPU time over all threads")
+    log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}"
+        f" {'cycles CPU':>11} {'omis CPU':>9} {'CPU ratio':>10}")
     for family, emitters, build in scenes:
         if emitters > args.max_emitters:
             continue
         objects = floor_scene(args.size)
         build()
-        c = 1e6 * per_sample(cycles(objects), 2, 32) / texels
-        o = 1e6 * per_sample(omis(objects), 4, 64) / texels
-        log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x")
+        c, c_cpu = (1e6 * t / texels for t in per_sample(cycles(objects), 2, 32))
+        o, o_cpu = (1e6 * t / texels for t in per_sample(omis(objects), 4, 64))
+        log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x"
+            f" {c_cpu:>11.3f} {o_cpu:>9.3f} {o_cpu / c_cpu:>9.2f}x")
 
 
 if __name__ == "__main__":

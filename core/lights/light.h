@@ -117,7 +117,8 @@ double light_pdf(const Light& light, ShapeSampler sampler, const Vec3& x, const 
                  const Vec3& w);
 
 // Unoccluded irradiance luminance at (x, n) (SPEC §5 for polygons): the
-// weight of `unoccluded` selection, the paper's "trained" technique.
+// weight of `unoccluded` selection, the paper's "trained" technique. For rects
+// and ellipses with spread, the spread-weighted irradiance within 1 %.
 double unoccluded_irradiance(const Light& light, const Vec3& x, const Vec3& n);
 
 }  // namespace omis

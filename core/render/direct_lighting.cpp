@@ -119,6 +119,11 @@ struct PointLighting::Impl {
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
+    // The shape pdf of each light in lights_along(x, w) for `sampler`: kept
+    // for the direction, as techniques that share a sampler (tree/… and
+    // power/…) ask for the same values.
+    const std::vector<double>& shape_pdfs_along(ShapeSampler sampler, const Vec3& x,
+                                                const Vec3& n, const Vec3& w);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t key, const std::vector<int>& active,
                             const int* counts, bool fresh);
@@ -156,6 +161,13 @@ struct PointLighting::Impl {
         bool valid = false;
         std::vector<std::uint32_t> lights;
     } along_;
+    struct ShapePdfs {
+        std::uint64_t along = 0;  // along_serial_ they were evaluated for
+        ShapeSampler sampler = ShapeSampler::Area;
+        Vec3 n;
+        std::vector<double> pdf;  // per light in along_.lights
+    } shape_pdfs_;
+    std::uint64_t along_serial_ = 0;  // counts along_'s recomputations
     struct Drawn {
         std::uint32_t light = ~0u;
         Vec3 w;
@@ -289,6 +301,7 @@ const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& 
     a.x = x;
     a.w = w;
     a.valid = true;
+    ++along_serial_;
     a.lights.clear();
     p_.scene.emitter_shapes().lights_along(x, w, a.lights);
     const auto& unshaped = p_.scene.unshaped_lights();
@@ -299,6 +312,23 @@ const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& 
         std::find(a.lights.begin(), a.lights.end(), drawn_.light) == a.lights.end())
         a.lights.push_back(drawn_.light);
     return a.lights;
+}
+
+const std::vector<double>& PointLighting::Impl::shape_pdfs_along(ShapeSampler sampler,
+                                                                 const Vec3& x, const Vec3& n,
+                                                                 const Vec3& w) {
+    const std::vector<std::uint32_t>& along = lights_along(x, w);
+    ShapePdfs& c = shape_pdfs_;
+    if (c.along == along_serial_ && c.sampler == sampler && c.n.x == n.x && c.n.y == n.y &&
+        c.n.z == n.z)
+        return c.pdf;
+    c.along = along_serial_;
+    c.sampler = sampler;
+    c.n = n;
+    c.pdf.clear();
+    for (std::uint32_t l : along) c.pdf.push_back(this->pdf(l, sampler, x, n, w));
+    counters.pdf_evaluations += along.size();
+    return c.pdf;
 }
 
 PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, const Vec3& n,
@@ -366,14 +396,12 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
     if (const LightSelector* s = p_.selector(t.selection)) {
         // Only lights along w have a density there.
         double pdf = 0;
-        const std::vector<std::uint32_t>& along = lights_along(x, w);
-        for (std::uint32_t l : along) {
+        const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
+        const std::vector<std::uint32_t>& along = along_.lights;
+        for (std::size_t i = 0; i < along.size(); ++i)
             // The shape's density first: it is 0 for most extra candidates,
             // and then the tree need not be walked.
-            const double shape = this->pdf(l, t.sampler, x, n, w);
-            if (shape > 0) pdf += s->pmf(x, n, l, &memo_) * shape;
-        }
-        counters.pdf_evaluations += along.size();
+            if (shape[i] > 0) pdf += s->pmf(x, n, along[i], &memo_) * shape[i];
         return pdf;
     }
     const LightChoice& c = choices_[k];
