@@ -98,7 +98,16 @@ struct PointLighting::Impl {
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
+    // choose_lights' per-point table for a whole footprint (its probes: the
+    // centre and corners), so a light that reaches part of a texel keeps its
+    // share wherever in the texel it was probed.
+    bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
+    // A light for technique k's sample, from its 2-D shape point (u1, u2): a
+    // per-point table selects by u1 and rescales u1 to [0, 1) within the
+    // chosen light's share, so each light's draws keep the 2-D stratification.
+    std::optional<SelectedLight> pick_light_stratified(int k, const Vec3& x, const Vec3& n,
+                                                       double& u1, double selection_u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
@@ -253,6 +262,54 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     return !c.lights.empty();
 }
 
+// The table covers a texel's footprint, not just its centre: a light that
+// reaches any probe (centre or corner) is in it, weighted by its mean weight
+// over the probes (`unoccluded`: mean unoccluded irradiance), and every other
+// light keeps the tiny share, so a light that reaches only the inside of the
+// footprint is still drawn (unbiased wherever the technique is active).
+// Without this, a texel on the edge of a spread light's reach dropped or
+// starved that light where its centre lay outside the reach.
+bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, int n_probes) {
+    const Technique& t = p_.settings.techniques[k];
+    LightChoice& c = choices_[k];
+    c.lights.clear();
+    c.probability.clear();
+    c.cdf.clear();
+    bool any = false;
+    double largest = 0;
+    for (std::uint32_t l : p_.integrated) {
+        const Light& light = p_.scene.lights()[l];
+        double w = 0;
+        int reached = 0;
+        for (int i = 0; i < n_probes; ++i) {
+            if (!sampler_applies(light, t.sampler, probes[i].x, probes[i].n)) continue;
+            ++reached;
+            w += t.selection == LightSelection::Unoccluded
+                     ? unoccluded_irradiance(light, probes[i].x, probes[i].n)
+                     : t.selection == LightSelection::Power ? p_.power[l] : 1.0;
+        }
+        any = any || reached > 0;
+        if (t.selection != LightSelection::Unoccluded && reached > 0) w /= reached;
+        else w /= n_probes;
+        c.lights.push_back(l);
+        c.probability.push_back(w);
+        largest = std::max(largest, w);
+    }
+    if (!any) return false;
+    double total = 0, running = 0;
+    for (double& w : c.probability) {
+        if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
+        total += w;
+    }
+    for (double& w : c.probability) {
+        w /= total;
+        running += w;
+        c.cdf.push_back(running);
+    }
+    c.cdf.back() = 1.0;
+    return true;
+}
+
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
                                                              const Vec3& n, double u) {
     const Technique& t = p_.settings.techniques[k];
@@ -260,6 +317,26 @@ std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& 
     const LightChoice& c = choices_[k];
     const std::size_t i = std::min<std::size_t>(
         std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1);
+    return SelectedLight{c.lights[i], c.probability[i]};
+}
+
+// As Cycles' light_distribution_sample (before its light tree): the
+// selection reuses the shape's first coordinate. For u1 uniform, light i is
+// chosen with probability P(i) and u1 rescaled within [cdf_{i-1}, cdf_i) is
+// again uniform and independent of the choice, so the draw stays unbiased;
+// with a (0,2)-net of shape points each light receives a stratified strip of
+// the net (and counts within ±2 of N·P(i)) instead of an irregular subset
+// picked by an unrelated dimension. Selectors without a per-point table (the
+// tree, many lights) keep their own selection dimension.
+std::optional<SelectedLight> PointLighting::Impl::pick_light_stratified(int k, const Vec3& x,
+                                                                        const Vec3& n, double& u1,
+                                                                        double selection_u) {
+    if (p_.selector(p_.settings.techniques[k].selection)) return pick_light(k, x, n, selection_u);
+    const LightChoice& c = choices_[k];
+    const std::size_t i = std::min<std::size_t>(
+        std::upper_bound(c.cdf.begin(), c.cdf.end(), u1) - c.cdf.begin(), c.lights.size() - 1);
+    const double low = i > 0 ? c.cdf[i - 1] : 0.0, width = c.cdf[i] - low;
+    if (width > 0) u1 = std::min((u1 - low) / width, std::nextafter(1.0, 0.0));
     return SelectedLight{c.lights[i], c.probability[i]};
 }
 
@@ -389,9 +466,10 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
 void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footprint* footprint,
                                         Active& active) {
     // Light choice (which lights, with what probability) is made once per
-    // point, at its centre — or, where no light applies there, at the first
-    // corner of the footprint where one does — and kept for every sample of
-    // the footprint. A fixed choice is a valid technique at every position:
+    // point and kept for every sample of the footprint: per-point tables over
+    // the centre and corners together (choose_lights_over); selectors at the
+    // centre — or, where no light applies there, at the first corner where
+    // one does. A fixed choice is a valid technique at every position:
     // its density at a sample's own position x_s is Σ_l P(l) p_l(ω | x_s),
     // which is what technique_pdf evaluates, so the combination stays
     // unbiased; a light that applies nowhere it was probed is left to the
@@ -402,10 +480,14 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
         for (double u : {0.0, 1.0})
             for (double v : {0.0, 1.0}) probes[n_probes++] = footprint->at(u, v);
     for (int k : p_.techniques) {
-        if (!p_.settings.techniques[k].bsdf) {
+        const Technique& t = p_.settings.techniques[k];
+        if (!t.bsdf) {
             bool reaches = false;
-            for (int i = 0; i < n_probes && !reaches; ++i)
-                reaches = choose_lights(k, probes[i].x, probes[i].n);
+            if (footprint && !p_.selector(t.selection))
+                reaches = choose_lights_over(k, probes, n_probes);
+            else
+                for (int i = 0; i < n_probes && !reaches; ++i)
+                    reaches = choose_lights(k, probes[i].x, probes[i].n);
             if (!reaches) continue;
             active.lights.push_back(k);
             active.light_mask |= std::uint64_t(1) << k;
@@ -458,7 +540,8 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
         throw LightingCancelled{};
     // Dimension groups of the sequence: 0 footprint position, 1 light
-    // selection, 2 light shape or BSDF direction.
+    // selection by a selector (tree, many lights), 2 light shape or BSDF
+    // direction (a per-point table selects by its first coordinate).
     SurfacePoint p = centre;
     if (footprint) {
         double fu, fv;
@@ -480,7 +563,8 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
         ok = dot(w, p.n) > 0;
     } else {
-        const auto light = pick_light(k, p.x, p.n, sequence.get_1d(index, 1));
+        const auto light =
+            pick_light_stratified(k, p.x, p.n, u1, sequence.get_1d(index, 1));
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
