@@ -263,34 +263,41 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
 }
 
 // The table covers a texel's footprint, not just its centre: a light that
-// reaches any probe (centre or corner) is in it, weighted by its mean weight
-// over the probes (`unoccluded`: mean unoccluded irradiance), and every other
-// light keeps the tiny share, so a light that reaches only the inside of the
-// footprint is still drawn (unbiased wherever the technique is active).
-// Without this, a texel on the edge of a spread light's reach dropped or
-// starved that light where its centre lay outside the reach.
+// reaches the centre weighs what it does there (`unoccluded`: its unoccluded
+// irradiance), one that reaches only some corners the mean over the probes
+// (probes[0] is the centre), and every other light keeps the tiny share, so a
+// light that reaches only the inside of the footprint is still drawn
+// (unbiased wherever the technique is active). A table made at the centre
+// alone dropped a light from every texel whose centre it did not reach — the
+// rim of a spread light's reach, the plane of a one-sided light. Corners are
+// probed only for lights that miss the centre: the weights cost per pass.
 bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, int n_probes) {
     const Technique& t = p_.settings.techniques[k];
     LightChoice& c = choices_[k];
     c.lights.clear();
     c.probability.clear();
     c.cdf.clear();
+    auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
+        if (t.selection == LightSelection::Power) return p_.power[l];
+        if (t.selection == LightSelection::Unoccluded)
+            return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
+        return 1.0;
+    };
     bool any = false;
     double largest = 0;
     for (std::uint32_t l : p_.integrated) {
         const Light& light = p_.scene.lights()[l];
         double w = 0;
-        int reached = 0;
-        for (int i = 0; i < n_probes; ++i) {
-            if (!sampler_applies(light, t.sampler, probes[i].x, probes[i].n)) continue;
-            ++reached;
-            w += t.selection == LightSelection::Unoccluded
-                     ? unoccluded_irradiance(light, probes[i].x, probes[i].n)
-                     : t.selection == LightSelection::Power ? p_.power[l] : 1.0;
+        if (sampler_applies(light, t.sampler, probes[0].x, probes[0].n)) {
+            w = weight(l, probes[0]);
+            any = true;
+        } else {
+            for (int i = 1; i < n_probes; ++i)
+                if (sampler_applies(light, t.sampler, probes[i].x, probes[i].n)) {
+                    w += weight(l, probes[i]) / n_probes;
+                    any = true;
+                }
         }
-        any = any || reached > 0;
-        if (t.selection != LightSelection::Unoccluded && reached > 0) w /= reached;
-        else w /= n_probes;
         c.lights.push_back(l);
         c.probability.push_back(w);
         largest = std::max(largest, w);
