@@ -79,9 +79,16 @@ struct PointLighting::Impl {
         MisEstimator* main;
         MisEstimator* hidden;  // null unless lights invisible to BSDF rays are sampled
     };
+    // A light drawn from a per-point table before the sample (LightStreams):
+    // its slot in the table and its shape point.
+    struct TableDraw {
+        int slot = -1;  // -1: take_sample selects (bsdf, selectors)
+        double u1 = 0, u2 = 0;
+    };
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
-                     const Estimators* into, int n_into);
+                     const Estimators* into, int n_into, const TableDraw& drawn);
+    class LightStreams;
     // Sum of the estimates (and their own variance estimates, if asked).
     static Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
     // The balance heuristic's estimate from the same samples (optimal
@@ -103,11 +110,6 @@ struct PointLighting::Impl {
     // share wherever in the texel it was probed.
     bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
-    // A light for technique k's sample, from its 2-D shape point (u1, u2): a
-    // per-point table selects by u1 and rescales u1 to [0, 1) within the
-    // chosen light's share, so each light's draws keep the 2-D stratification.
-    std::optional<SelectedLight> pick_light_stratified(int k, const Vec3& x, const Vec3& n,
-                                                       double& u1, double selection_u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
@@ -327,26 +329,6 @@ std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& 
     return SelectedLight{c.lights[i], c.probability[i]};
 }
 
-// As Cycles' light_distribution_sample (before its light tree): the
-// selection reuses the shape's first coordinate. For u1 uniform, light i is
-// chosen with probability P(i) and u1 rescaled within [cdf_{i-1}, cdf_i) is
-// again uniform and independent of the choice, so the draw stays unbiased;
-// with a (0,2)-net of shape points each light receives a stratified strip of
-// the net (and counts within ±2 of N·P(i)) instead of an irregular subset
-// picked by an unrelated dimension. Selectors without a per-point table (the
-// tree, many lights) keep their own selection dimension.
-std::optional<SelectedLight> PointLighting::Impl::pick_light_stratified(int k, const Vec3& x,
-                                                                        const Vec3& n, double& u1,
-                                                                        double selection_u) {
-    if (p_.selector(p_.settings.techniques[k].selection)) return pick_light(k, x, n, selection_u);
-    const LightChoice& c = choices_[k];
-    const std::size_t i = std::min<std::size_t>(
-        std::upper_bound(c.cdf.begin(), c.cdf.end(), u1) - c.cdf.begin(), c.lights.size() - 1);
-    const double low = i > 0 ? c.cdf[i - 1] : 0.0, width = c.cdf[i] - low;
-    if (width > 0) u1 = std::min((u1 - low) / width, std::nextafter(1.0, 0.0));
-    return SelectedLight{c.lights[i], c.probability[i]};
-}
-
 const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& x,
                                                                     const Vec3& w) {
     Along& a = along_;
@@ -541,14 +523,15 @@ Vec3 PointLighting::Impl::delta_lighting(const SurfacePoint& p, double u) {
 void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const ScrambledSobol& sequence, std::uint32_t index,
                                       const SurfacePoint& centre, const Footprint* footprint,
-                                      const Estimators* into, int n_into) {
+                                      const Estimators* into, int n_into,
+                                      const TableDraw& drawn) {
     ++counters.samples;
     // Cancellation within a point (huge counts): see keep_going.
     if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
         throw LightingCancelled{};
     // Dimension groups of the sequence: 0 footprint position, 1 light
-    // selection by a selector (tree, many lights), 2 light shape or BSDF
-    // direction (a per-point table selects by its first coordinate).
+    // selection, 2 light shape or BSDF direction (a light drawn from a
+    // per-point table takes its shape from its own sequence: `drawn`).
     SurfacePoint p = centre;
     if (footprint) {
         double fu, fv;
@@ -570,8 +553,15 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
         ok = dot(w, p.n) > 0;
     } else {
-        const auto light =
-            pick_light_stratified(k, p.x, p.n, u1, sequence.get_1d(index, 1));
+        std::optional<SelectedLight> light;
+        if (drawn.slot >= 0) {
+            const LightChoice& c = choices_[k];
+            light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
+            u1 = drawn.u1;
+            u2 = drawn.u2;
+        } else {
+            light = pick_light(k, p.x, p.n, sequence.get_1d(index, 1));
+        }
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
@@ -661,6 +651,68 @@ Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
     return total;
 }
 
+// Per-light sample streams for the light techniques that draw from a
+// per-point table: the table picks a light by the technique sequence's
+// selection dimension, and the light's shape point is the next unused point
+// of that light's OWN scrambled sequence (per technique, stream and light).
+// Each light's draws then form a stratified prefix whatever its share — a
+// strip of one shared net is stratified only for dyadic shares, and a shape
+// taken from an unrelated dimension not at all. Unbiased: a light's sequence
+// is independent of the selections, so its next point is uniform whatever
+// the count. A later pass continues every count: the table is the same at
+// every pass, so the selections of earlier rounds are replayed (cheap: no
+// rays, one table lookup each).
+class PointLighting::Impl::LightStreams {
+public:
+    LightStreams(Impl& impl, std::uint64_t base, const Active& active, int first_round)
+        : impl_(impl), base_(base), lights_(impl.p_.integrated.size()) {
+        const auto& techniques = impl.p_.settings.techniques;
+        taken_.assign(techniques.size() * kSampleStreams * lights_, 0);
+        for (int k : active.lights) {
+            if (!uses_table(k)) continue;
+            const int per_round = impl.p_.settings.samples[k];
+            for (int s = 0; s < kSampleStreams; ++s) {
+                const int earlier = first_round > s ? (first_round - s + kSampleStreams - 1) / kSampleStreams : 0;
+                const ScrambledSobol seq = technique_sequence(k, s);
+                for (std::uint32_t i = 0; i < std::uint32_t(earlier * per_round); ++i)
+                    ++count(k, s, slot(k, seq, i));
+            }
+        }
+    }
+    bool uses_table(int k) const {
+        const Technique& t = impl_.p_.settings.techniques[k];
+        return !t.bsdf && !impl_.p_.selector(t.selection);
+    }
+    ScrambledSobol technique_sequence(int k, int s) const {
+        return ScrambledSobol(base_ ^ mix64(std::uint64_t(k) * kSampleStreams + std::uint64_t(s) + 1));
+    }
+    // Technique k's draw `index` of stream s: its light and shape point.
+    TableDraw draw(int k, int s, const ScrambledSobol& seq, std::uint32_t index) {
+        TableDraw d;
+        d.slot = slot(k, seq, index);
+        const std::uint64_t id = (std::uint64_t(k) * kSampleStreams + std::uint64_t(s)) << 32 |
+                                 std::uint64_t(d.slot + 1);
+        const ScrambledSobol light_sequence(base_ ^ mix64(0x6a09e667f3bcc909ull ^ id));
+        light_sequence.get_2d(count(k, s, d.slot)++, 2, d.u1, d.u2);
+        return d;
+    }
+
+private:
+    int slot(int k, const ScrambledSobol& seq, std::uint32_t index) const {
+        const LightChoice& c = impl_.choices_[k];
+        const double u = seq.get_1d(index, 1);
+        return int(std::min<std::size_t>(
+            std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1));
+    }
+    std::uint32_t& count(int k, int s, int slot) {
+        return taken_[(std::size_t(k) * kSampleStreams + std::size_t(s)) * lights_ + std::size_t(slot)];
+    }
+    Impl& impl_;
+    std::uint64_t base_;
+    std::size_t lights_;
+    std::vector<std::uint32_t> taken_;  // per technique, stream and table slot
+};
+
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
@@ -678,6 +730,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     auto sequence = [&](std::size_t k, int s) {
         return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
     };
+    LightStreams light_streams(*this, base, active, first_round);
     const std::size_t delta_group = p_.settings.techniques.size();
     int stream_rounds[K] = {};
     for (int r = first_round; r < first_round + rounds; ++r) ++stream_rounds[r % K];
@@ -728,10 +781,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
             const ScrambledSobol seq = sequence(std::size_t(k), s);
-            for (int j = 0; j < counts[k]; ++j)
-                take_sample(active, a, seq,
-                            round_in_stream * std::uint32_t(p_.settings.samples[k]) + j, centre,
-                            footprint, into, by_stream ? 2 : 1);
+            const bool table = light_streams.uses_table(k);
+            for (int j = 0; j < counts[k]; ++j) {
+                const std::uint32_t index =
+                    round_in_stream * std::uint32_t(p_.settings.samples[k]) + j;
+                take_sample(active, a, seq, index, centre, footprint, into, by_stream ? 2 : 1,
+                            table ? light_streams.draw(k, s, seq, index) : TableDraw{});
+            }
         }
     }
 
