@@ -2,6 +2,7 @@
 
     bash scripts/blender_run.sh bench/bench_cycles.py [--out DIR] [--quick]
         [--scenes a,b,...] [--budgets 0.05,0.1,0.25,0.5,1,2] [--ref-seconds S] [--size N]
+        [--techniques bsdf,uniform/solid-angle,...]
 
 Scenes: every scene of the Cycles-agreement suite (tests/blender/cycles_scenes.py
 SCENES, read at start-up; EXCLUDED lists those where omis and Cycles differ by
@@ -14,8 +15,9 @@ Per scene:
   two bakes); for a budget T it gets spp = max(1, round((T − t0)/k)), so its
   whole operator call (sync, BVH, sampling, write-back) takes about T.
 - omis: the add-on's BakeJob (export + native bake + write-back, as
-  omis_bake.bake does) with time_budget = T, the effect plan's techniques,
-  margin 0; strategies balance and optimal-direct.
+  omis_bake.bake does) with time_budget = T, the effect plan's techniques
+  (or --techniques, to compare another choice), margin 0; strategies balance
+  and optimal-direct. The log lists the plan's techniques per scene.
 - Times on the plot are measured wall times of the whole bake call for both.
 - References (converged): one per renderer (both box-filter each texel over its
   footprint; separate references keep any remaining modelling difference out
