@@ -2,6 +2,7 @@
 
     bash scripts/blender_run.sh bench/bench_cycles.py [--out DIR] [--quick]
         [--scenes a,b,...] [--budgets 0.05,0.1,0.25,0.5,1,2] [--ref-seconds S] [--size N]
+        [--techniques bsdf,uniform/solid-angle,...]
 
 Scenes: every scene of the Cycles-agreement suite (tests/blender/cycles_scenes.py
 SCENES, read at start-up; EXCLUDED lists those where omis and Cycles differ by
@@ -14,8 +15,9 @@ Per scene:
   two bakes); for a budget T it gets spp = max(1, round((T − t0)/k)), so its
   whole operator call (sync, BVH, sampling, write-back) takes about T.
 - omis: the add-on's BakeJob (export + native bake + write-back, as
-  omis_bake.bake does) with time_budget = T, the effect plan's techniques,
-  margin 0; strategies balance and optimal-direct.
+  omis_bake.bake does) with time_budget = T, the effect plan's techniques
+  (or --techniques, to compare another choice), margin 0; strategies balance
+  and optimal-direct. The log lists the plan's techniques per scene.
 - Times on the plot are measured wall times of the whole bake call for both.
 - References (converged): one per renderer (both box-filter each texel over its
   footprint; separate references keep any remaining modelling difference out
@@ -48,7 +50,7 @@ import omis_test_utils as U  # noqa: E402
 import cycles_scenes  # noqa: E402
 
 from omis_bake.job import BakeJob  # noqa: E402
-from omis_bake.settings import settings_from  # noqa: E402
+from omis_bake.settings import TECHNIQUE_NAME, settings_from  # noqa: E402
 
 
 def _load_demo():
@@ -73,6 +75,7 @@ SCENES = {name: builder for name, builder in cycles_scenes.SCENES.items()
 SCENES["demo_room"] = scene_demo
 
 STRATEGIES = ("cycles", "omis balance", "omis optimal")
+TECHNIQUES_OVERRIDE = None  # set by --techniques
 
 
 log = U.log
@@ -95,6 +98,8 @@ def omis_run(objects, image, strategy, seed, seconds=0.0, samples=1 << 30):
     overrides = {"samples": int(samples), "time_budget": float(seconds), "margin": 0,
                  "seed": int(seed), "use_noise_target": False, "technique_mode": 'AUTO',
                  "use_clear": True}
+    if TECHNIQUES_OVERRIDE:  # --techniques: compare another plan with the effect plan's
+        overrides.update(technique_mode='MANUAL', techniques=TECHNIQUES_OVERRIDE)
     if strategy == "balance":
         overrides.update(use_optimal_mis=False, heuristic='BALANCE')
     else:
@@ -185,8 +190,9 @@ def run_scene(name, args):
     # omis' covered texels (the same UV islands Cycles bakes).
     _, _, stats0, cover = omis_run(objects, image, "balance", 1, samples=1)
     mask = interior(cover)
-    log(f"  plan: {stats0['plan'].splitlines()[-1].strip() if stats0['plan'] else '-'}; "
-        f"{int(mask.sum())} interior covered texels")
+    plan = [line.strip() for line in (stats0["plan"] or "").splitlines()
+            if line.strip().startswith(("+ ", "- "))]
+    log(f"  plan: {'; '.join(plan) or '-'}; {int(mask.sum())} interior covered texels")
 
     # References.
     half = 0.5 * args.ref_seconds
@@ -319,7 +325,18 @@ def main():
     parser.add_argument("--ref-seconds", type=float, default=None,
                         help="time per reference (two halves), per renderer")
     parser.add_argument("--size", type=int, default=None, help="image size (texels)")
+    parser.add_argument("--techniques", default=None,
+                        help="comma-separated technique names (SPEC §3) for omis instead "
+                             "of the effect plan's choice, e.g. uniform/solid-angle,bsdf")
     args = parser.parse_args(script_args())
+    if args.techniques:
+        global TECHNIQUES_OVERRIDE
+        names = {name: ident for ident, name in TECHNIQUE_NAME.items()}
+        unknown = [t for t in args.techniques.split(",") if t not in names]
+        if unknown:
+            raise SystemExit(f"--techniques: unknown {', '.join(unknown)}; known: "
+                             f"{', '.join(names)}")
+        TECHNIQUES_OVERRIDE = frozenset(names[t] for t in args.techniques.split(","))
     if args.quick:
         scenes = ["area", "demo_room"]
         budgets, ref_seconds, size = [0.1, 0.2, 0.4], 2.0, 64

@@ -79,9 +79,16 @@ struct PointLighting::Impl {
         MisEstimator* main;
         MisEstimator* hidden;  // null unless lights invisible to BSDF rays are sampled
     };
+    // A light drawn from a per-point table before the sample (LightStreams):
+    // its slot in the table and its shape point.
+    struct TableDraw {
+        int slot = -1;  // -1: take_sample selects (bsdf, selectors)
+        double u1 = 0, u2 = 0;
+    };
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
-                     const Estimators* into, int n_into);
+                     const Estimators* into, int n_into, const TableDraw& drawn);
+    class LightStreams;
     // Sum of the estimates (and their own variance estimates, if asked).
     // The estimators' results stay in results_ (main, hidden) until the next call.
     Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
@@ -115,6 +122,10 @@ struct PointLighting::Impl {
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
+    // choose_lights' per-point table for a whole footprint (its probes: the
+    // centre and corners), so a light that reaches part of a texel keeps its
+    // share wherever in the texel it was probed.
+    bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
@@ -282,6 +293,61 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     return !c.lights.empty();
 }
 
+// The table covers a texel's footprint, not just its centre: a light that
+// reaches the centre weighs what it does there (`unoccluded`: its unoccluded
+// irradiance), one that reaches only some corners the mean over the probes
+// (probes[0] is the centre), and every other light keeps the tiny share, so a
+// light that reaches only the inside of the footprint is still drawn
+// (unbiased wherever the technique is active). A table made at the centre
+// alone dropped a light from every texel whose centre it did not reach — the
+// rim of a spread light's reach, the plane of a one-sided light. Corners are
+// probed only for lights that miss the centre: the weights cost per pass.
+bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, int n_probes) {
+    const Technique& t = p_.settings.techniques[k];
+    LightChoice& c = choices_[k];
+    c.lights.clear();
+    c.probability.clear();
+    c.cdf.clear();
+    auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
+        if (t.selection == LightSelection::Power) return p_.power[l];
+        if (t.selection == LightSelection::Unoccluded)
+            return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
+        return 1.0;
+    };
+    bool any = false;
+    double largest = 0;
+    for (std::uint32_t l : p_.integrated) {
+        const Light& light = p_.scene.lights()[l];
+        double w = 0;
+        if (sampler_applies(light, t.sampler, probes[0].x, probes[0].n)) {
+            w = weight(l, probes[0]);
+            any = true;
+        } else {
+            for (int i = 1; i < n_probes; ++i)
+                if (sampler_applies(light, t.sampler, probes[i].x, probes[i].n)) {
+                    w += weight(l, probes[i]) / n_probes;
+                    any = true;
+                }
+        }
+        c.lights.push_back(l);
+        c.probability.push_back(w);
+        largest = std::max(largest, w);
+    }
+    if (!any) return false;
+    double total = 0, running = 0;
+    for (double& w : c.probability) {
+        if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
+        total += w;
+    }
+    for (double& w : c.probability) {
+        w /= total;
+        running += w;
+        c.cdf.push_back(running);
+    }
+    c.cdf.back() = 1.0;
+    return true;
+}
+
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
                                                              const Vec3& n, double u) {
     const Technique& t = p_.settings.techniques[k];
@@ -434,9 +500,10 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
 void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footprint* footprint,
                                         Active& active) {
     // Light choice (which lights, with what probability) is made once per
-    // point, at its centre — or, where no light applies there, at the first
-    // corner of the footprint where one does — and kept for every sample of
-    // the footprint. A fixed choice is a valid technique at every position:
+    // point and kept for every sample of the footprint: per-point tables over
+    // the centre and corners together (choose_lights_over); selectors at the
+    // centre — or, where no light applies there, at the first corner where
+    // one does. A fixed choice is a valid technique at every position:
     // its density at a sample's own position x_s is Σ_l P(l) p_l(ω | x_s),
     // which is what technique_pdf evaluates, so the combination stays
     // unbiased; a light that applies nowhere it was probed is left to the
@@ -447,10 +514,14 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
         for (double u : {0.0, 1.0})
             for (double v : {0.0, 1.0}) probes[n_probes++] = footprint->at(u, v);
     for (int k : p_.techniques) {
-        if (!p_.settings.techniques[k].bsdf) {
+        const Technique& t = p_.settings.techniques[k];
+        if (!t.bsdf) {
             bool reaches = false;
-            for (int i = 0; i < n_probes && !reaches; ++i)
-                reaches = choose_lights(k, probes[i].x, probes[i].n);
+            if (footprint && !p_.selector(t.selection))
+                reaches = choose_lights_over(k, probes, n_probes);
+            else
+                for (int i = 0; i < n_probes && !reaches; ++i)
+                    reaches = choose_lights(k, probes[i].x, probes[i].n);
             if (!reaches) continue;
             active.lights.push_back(k);
             active.light_mask |= std::uint64_t(1) << k;
@@ -497,13 +568,15 @@ Vec3 PointLighting::Impl::delta_lighting(const SurfacePoint& p, double u) {
 void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const ScrambledSobol& sequence, std::uint32_t index,
                                       const SurfacePoint& centre, const Footprint* footprint,
-                                      const Estimators* into, int n_into) {
+                                      const Estimators* into, int n_into,
+                                      const TableDraw& drawn) {
     ++counters.samples;
     // Cancellation within a point (huge counts): see keep_going.
     if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
         throw LightingCancelled{};
     // Dimension groups of the sequence: 0 footprint position, 1 light
-    // selection, 2 light shape or BSDF direction.
+    // selection, 2 light shape or BSDF direction (a light drawn from a
+    // per-point table takes its shape from its own sequence: `drawn`).
     SurfacePoint p = centre;
     if (footprint) {
         double fu, fv;
@@ -525,7 +598,15 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
         ok = dot(w, p.n) > 0;
     } else {
-        const auto light = pick_light(k, p.x, p.n, sequence.get_1d(index, 1));
+        std::optional<SelectedLight> light;
+        if (drawn.slot >= 0) {
+            const LightChoice& c = choices_[k];
+            light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
+            u1 = drawn.u1;
+            u2 = drawn.u2;
+        } else {
+            light = pick_light(k, p.x, p.n, sequence.get_1d(index, 1));
+        }
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
@@ -650,6 +731,68 @@ double PointLighting::Impl::whole_alpha_inflation() const {
     return std::max(results_[0].fit_inflation, results_[1].fit_inflation);
 }
 
+// Per-light sample streams for the light techniques that draw from a
+// per-point table: the table picks a light by the technique sequence's
+// selection dimension, and the light's shape point is the next unused point
+// of that light's OWN scrambled sequence (per technique, stream and light).
+// Each light's draws then form a stratified prefix whatever its share — a
+// strip of one shared net is stratified only for dyadic shares, and a shape
+// taken from an unrelated dimension not at all. Unbiased: a light's sequence
+// is independent of the selections, so its next point is uniform whatever
+// the count. A later pass continues every count: the table is the same at
+// every pass, so the selections of earlier rounds are replayed (cheap: no
+// rays, one table lookup each).
+class PointLighting::Impl::LightStreams {
+public:
+    LightStreams(Impl& impl, std::uint64_t base, const Active& active, int first_round)
+        : impl_(impl), base_(base), lights_(impl.p_.integrated.size()) {
+        const auto& techniques = impl.p_.settings.techniques;
+        taken_.assign(techniques.size() * kSampleStreams * lights_, 0);
+        for (int k : active.lights) {
+            if (!uses_table(k)) continue;
+            const int per_round = impl.p_.settings.samples[k];
+            for (int s = 0; s < kSampleStreams; ++s) {
+                const int earlier = first_round > s ? (first_round - s + kSampleStreams - 1) / kSampleStreams : 0;
+                const ScrambledSobol seq = technique_sequence(k, s);
+                for (std::uint32_t i = 0; i < std::uint32_t(earlier * per_round); ++i)
+                    ++count(k, s, slot(k, seq, i));
+            }
+        }
+    }
+    bool uses_table(int k) const {
+        const Technique& t = impl_.p_.settings.techniques[k];
+        return !t.bsdf && !impl_.p_.selector(t.selection);
+    }
+    ScrambledSobol technique_sequence(int k, int s) const {
+        return ScrambledSobol(base_ ^ mix64(std::uint64_t(k) * kSampleStreams + std::uint64_t(s) + 1));
+    }
+    // Technique k's draw `index` of stream s: its light and shape point.
+    TableDraw draw(int k, int s, const ScrambledSobol& seq, std::uint32_t index) {
+        TableDraw d;
+        d.slot = slot(k, seq, index);
+        const std::uint64_t id = (std::uint64_t(k) * kSampleStreams + std::uint64_t(s)) << 32 |
+                                 std::uint64_t(d.slot + 1);
+        const ScrambledSobol light_sequence(base_ ^ mix64(0x6a09e667f3bcc909ull ^ id));
+        light_sequence.get_2d(count(k, s, d.slot)++, 2, d.u1, d.u2);
+        return d;
+    }
+
+private:
+    int slot(int k, const ScrambledSobol& seq, std::uint32_t index) const {
+        const LightChoice& c = impl_.choices_[k];
+        const double u = seq.get_1d(index, 1);
+        return int(std::min<std::size_t>(
+            std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1));
+    }
+    std::uint32_t& count(int k, int s, int slot) {
+        return taken_[(std::size_t(k) * kSampleStreams + std::size_t(s)) * lights_ + std::size_t(slot)];
+    }
+    Impl& impl_;
+    std::uint64_t base_;
+    std::size_t lights_;
+    std::vector<std::uint32_t> taken_;  // per technique, stream and table slot
+};
+
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
@@ -667,6 +810,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     auto sequence = [&](std::size_t k, int s) {
         return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
     };
+    LightStreams light_streams(*this, base, active, first_round);
     const std::size_t delta_group = p_.settings.techniques.size();
     int stream_rounds[K] = {};
     for (int r = first_round; r < first_round + rounds; ++r) ++stream_rounds[r % K];
@@ -720,10 +864,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
             const ScrambledSobol seq = sequence(std::size_t(k), s);
-            for (int j = 0; j < counts[k]; ++j)
-                take_sample(active, a, seq,
-                            round_in_stream * std::uint32_t(p_.settings.samples[k]) + j, centre,
-                            footprint, into, by_stream && !in_whole ? 2 : 1);
+            const bool table = light_streams.uses_table(k);
+            for (int j = 0; j < counts[k]; ++j) {
+                const std::uint32_t index =
+                    round_in_stream * std::uint32_t(p_.settings.samples[k]) + j;
+                take_sample(active, a, seq, index, centre, footprint, into, by_stream && !in_whole ? 2 : 1,
+                            table ? light_streams.draw(k, s, seq, index) : TableDraw{});
+            }
         }
     }
 

@@ -37,9 +37,10 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
                         const std::vector<int>& samples);
 
 // The effect plan's default choice of techniques and samples per round for a
-// scene (what a bake uses when the caller names none): solid angle + area for
-// one light; unoccluded + power selection, both solid angle, for several; plus
-// bsdf when there is a world or an emissive mesh.
+// scene (what a bake uses when the caller names none): solid angle for one
+// light; unoccluded + power selection, both solid angle, for several; tree +
+// power for many; plus bsdf when there is a world (not alone), an emissive
+// mesh or a huge light.
 // Beyond these counts the plan stops looping over lights per point: delta
 // lights are drawn from a light tree, and the default light technique selects
 // by the tree instead of by exact unoccluded irradiance. Integrated lights:
