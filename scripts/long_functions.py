@@ -71,6 +71,8 @@ def header_name(head):
 
 def long_functions(path, limit):
     text = blank_comments_and_strings(path.read_text(errors="replace"))
+    # Preprocessor lines (#if defined(X) ...) would read as a function head.
+    text = re.sub(r"(?m)^[ \t]*#.*$", lambda m: " " * len(m.group(0)), text)
     found, stack, last_stmt_end = [], [], 0
     for pos, ch in enumerate(text):
         if ch in ";}":

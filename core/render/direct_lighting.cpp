@@ -89,6 +89,25 @@ struct PointLighting::Impl {
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
                      const Estimators* into, int n_into, const TableDraw& drawn);
     class LightStreams;
+    // shade's pieces: how its rounds fall into the streams, the estimators
+    // they go to, the delta lights' sums, and the point's estimate from them.
+    struct RoundPlan {
+        int rounds = 0;
+        int stream_rounds[kSampleStreams] = {};
+        int streams_used = 0;
+        bool by_stream = false;  // each stream's estimate is kept
+        bool in_whole = false;   // ... as sums inside the whole's estimators
+    };
+    RoundPlan plan_rounds(int first_round, int rounds, bool want_error) const;
+    void set_up_estimators(const Active& active, const RoundPlan& plan, const int* counts,
+                           bool fresh, Estimators& all, Estimators* per);
+    struct DeltaSums {
+        bool per_round = false;  // a position per round (else at_centre)
+        Vec3 sum[kSampleStreams], sum2, at_centre;
+    };
+    Vec3 point_estimate(const Active& active, const RoundPlan& plan, const Estimators& all,
+                        const Estimators* per, const DeltaSums& delta, Vec3& own_variance,
+                        Vec3& error_variance);
     // Sum of the estimates (and their own variance estimates, if asked).
     // The estimators' results stay in results_ (main, hidden) until the next call.
     Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
@@ -793,6 +812,110 @@ private:
     std::vector<std::uint32_t> taken_;  // per technique, stream and table slot
 };
 
+// How a call's rounds fall into the streams, and whether each stream's
+// estimate is kept: for the error when asked, and for the optimal strategies'
+// choice against balance (balance_is_better).
+PointLighting::Impl::RoundPlan PointLighting::Impl::plan_rounds(int first_round, int rounds,
+                                                                bool want_error) const {
+    RoundPlan plan;
+    plan.rounds = rounds;
+    for (int r = first_round; r < first_round + rounds; ++r) ++plan.stream_rounds[r % kSampleStreams];
+    plan.streams_used = int(std::count_if(plan.stream_rounds, plan.stream_rounds + kSampleStreams,
+                                          [](int m) { return m > 0; }));
+    plan.by_stream = plan.streams_used >= 2 && (want_error || is_optimal(p_.settings.strategy));
+    plan.in_whole = streams_in_whole(p_.settings.strategy, plan.by_stream);
+    return plan;
+}
+
+// Estimators: one over all rounds (with per-stream sums inside when
+// plan.in_whole), else one more per stream that holds rounds.
+void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPlan& plan,
+                                            const int* counts, bool fresh, Estimators& all,
+                                            Estimators* per) {
+    if (active.all.empty()) return;
+    const std::uint64_t fresh_key = fresh ? std::uint64_t(1) << 50 : 0;  // uncached counts
+    const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
+    for (int s = -1; s < kSampleStreams; ++s) {
+        if (s >= 0 && (!plan.by_stream || plan.in_whole || plan.stream_rounds[s] == 0)) continue;
+        const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
+        Estimators& e = s < 0 ? all : per[s];
+        if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
+        e.main = &estimator(main_cache_, key | active.mask, active.all, counts, fresh);
+        if (hidden)
+            e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
+                                  fresh);
+    }
+    set_streams(all, plan.in_whole ? kSampleStreams : 0);
+}
+
+// The point's estimate once its rounds are in: the whole's estimate, then
+// each stream's — the optimal strategies compare it with balance's
+// (balance_is_better), and the chosen one's spread is the error;
+// optimal-direct applies the whole's α to every stream. own_variance: as for
+// independent draws; error_variance: from the streams' spread when kept.
+Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& plan,
+                                         const Estimators& all, const Estimators* per,
+                                         const DeltaSums& delta, Vec3& own_variance,
+                                         Vec3& error_variance) {
+    constexpr int K = kSampleStreams;
+    const int rounds = plan.rounds;
+    const bool sampled = !active.all.empty();
+    const bool optimal = is_optimal(p_.settings.strategy);
+    const bool direct = p_.settings.strategy == Strategy::OptimalDirect;
+    own_variance = Vec3();
+    Vec3 whole, total = delta.at_centre;
+    double inflation = 1;
+    if (sampled) {
+        for (MisResult& r : results_) r.fit_inflation = 1;  // no hidden estimator: none
+        whole = estimate_of(all, &own_variance);
+        if (direct) inflation = whole_alpha_inflation();
+    }
+    Vec3 stream_estimate[K], stream_balance[K];
+    if (plan.by_stream && sampled)
+        for (int s = 0; s < K; ++s) {
+            if (!plan.stream_rounds[s]) continue;
+            if (!plan.in_whole) {  // optimal-progressive: its own cross-fit per stream
+                stream_balance[s] = balance_of(per[s]);
+                stream_estimate[s] = estimate_of(per[s]);
+                continue;
+            }
+            // The heuristics' own estimate; optimal-direct's with the whole's α.
+            stream_of(all, s, direct, stream_balance[s], stream_estimate[s]);
+        }
+    const bool use_balance =
+        sampled && plan.by_stream && optimal &&
+        balance_is_better(stream_estimate, stream_balance, plan.stream_rounds, inflation);
+    if (sampled) total += use_balance ? balance_of(all) : whole;
+    Vec3 delta_total;
+    for (const Vec3& d : delta.sum) delta_total += d;
+    total += delta_total / double(rounds);
+    if (rounds > 1) {  // the delta lights' mean over positions, as independent draws
+        const Vec3 m = delta_total / double(rounds);
+        const Vec3 spread = delta.sum2 / double(rounds) - Vec3(m.x * m.x, m.y * m.y, m.z * m.z);
+        own_variance += Vec3(std::max(0.0, spread.x), std::max(0.0, spread.y),
+                             std::max(0.0, spread.z)) / double(rounds - 1);
+    }
+    error_variance = own_variance;
+    if (!plan.by_stream) return total;
+    // Var(mean) = Σ m_s (e_s − ē)² / ((S − 1) M): the streams' estimates e_s
+    // are independent with variance σ²/m_s.
+    Vec3 e[K], mean;
+    for (int s = 0; s < K; ++s) {
+        if (!plan.stream_rounds[s]) continue;
+        e[s] = delta.sum[s] / double(plan.stream_rounds[s]);
+        if (sampled) e[s] += use_balance ? stream_balance[s] : stream_estimate[s];
+        mean += e[s] * (double(plan.stream_rounds[s]) / rounds);
+    }
+    error_variance = Vec3();
+    for (int s = 0; s < K; ++s) {
+        if (!plan.stream_rounds[s]) continue;
+        const Vec3 d = e[s] - mean;
+        error_variance += Vec3(d.x * d.x, d.y * d.y, d.z * d.z) * double(plan.stream_rounds[s]);
+    }
+    error_variance = error_variance / (double(plan.streams_used - 1) * rounds);
+    return total;
+}
+
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
@@ -812,42 +935,19 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     };
     LightStreams light_streams(*this, base, active, first_round);
     const std::size_t delta_group = p_.settings.techniques.size();
-    int stream_rounds[K] = {};
-    for (int r = first_round; r < first_round + rounds; ++r) ++stream_rounds[r % K];
-    const int streams_used = int(std::count_if(stream_rounds, stream_rounds + K,
-                                               [](int m) { return m > 0; }));
-    // Per-stream estimators: for the error when asked (variance not null), and
-    // for the optimal strategies' choice against balance (balance_is_better).
-    const bool by_stream =
-        streams_used >= 2 && (variance || is_optimal(p_.settings.strategy));
-    const bool in_whole = streams_in_whole(p_.settings.strategy, by_stream);
-
-    // Estimators: one over all rounds, and one per stream for the error.
-    const bool fresh = counts_in != nullptr;  // counts differ from the cached ones
-    const std::uint64_t fresh_key = fresh ? std::uint64_t(1) << 50 : 0;
+    const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[K] = {};
-    const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
-    for (int s = -1; s < K && !active.all.empty(); ++s) {
-        if (s >= 0 && (!by_stream || in_whole || stream_rounds[s] == 0)) continue;
-        const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
-        Estimators& e = s < 0 ? all : per[s];
-        if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
-        e.main = &estimator(main_cache_, key | active.mask, active.all, counts, fresh);
-        if (hidden)
-            e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
-                                  fresh);
-    }
-    if (!active.all.empty()) set_streams(all, in_whole ? K : 0);
+    set_up_estimators(active, plan, counts, counts_in != nullptr, all, per);
 
     // Delta lights are evaluated once per round where positions vary or lights
     // are drawn, else once at the centre.
-    const bool delta_per_round =
-        !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
-    Vec3 delta_sum[K], delta_sum2;
+    DeltaSums delta;
+    delta.per_round = !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
+    const bool by_stream_only = plan.by_stream && !plan.in_whole;
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
-        if (delta_per_round) {
+        if (delta.per_round) {
             const ScrambledSobol seq = sequence(delta_group, s);
             SurfacePoint at = centre;
             if (footprint) {
@@ -856,11 +956,11 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                 at = footprint->at(fu, fv);
             }
             const Vec3 d = delta_lighting(at, seq.get_1d(round_in_stream, 1));
-            delta_sum[s] += d;
-            delta_sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
+            delta.sum[s] += d;
+            delta.sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
         }
         const Estimators into[2] = {all, per[s]};
-        if (in_whole && !active.all.empty()) set_stream(all, s);
+        if (plan.in_whole && !active.all.empty()) set_stream(all, s);
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
             const ScrambledSobol seq = sequence(std::size_t(k), s);
@@ -868,71 +968,16 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             for (int j = 0; j < counts[k]; ++j) {
                 const std::uint32_t index =
                     round_in_stream * std::uint32_t(p_.settings.samples[k]) + j;
-                take_sample(active, a, seq, index, centre, footprint, into, by_stream && !in_whole ? 2 : 1,
+                take_sample(active, a, seq, index, centre, footprint, into,
+                            by_stream_only ? 2 : 1,
                             table ? light_streams.draw(k, s, seq, index) : TableDraw{});
             }
         }
     }
+    if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
-    Vec3 own_variance;
-    Vec3 total = delta_per_round || p_.delta.empty() ? Vec3() : delta_lighting(centre, 0.0);
-    // The whole's estimate, then each stream's: the optimal strategies compare
-    // it with balance's (balance_is_better), and the chosen one's spread is
-    // the error. optimal-direct applies the whole's α to every stream.
-    const bool optimal = is_optimal(p_.settings.strategy);
-    const bool direct = p_.settings.strategy == Strategy::OptimalDirect;
-    Vec3 whole;
-    double inflation = 1;
-    if (!active.all.empty()) {
-        for (MisResult& r : results_) r.fit_inflation = 1;  // no hidden estimator: none
-        whole = estimate_of(all, &own_variance);
-        if (direct) inflation = whole_alpha_inflation();
-    }
-    Vec3 stream_estimate[K], stream_balance[K];
-    if (by_stream && !active.all.empty())
-        for (int s = 0; s < K; ++s) {
-            if (!stream_rounds[s]) continue;
-            if (!in_whole) {  // optimal-progressive: its own cross-fit per stream
-                stream_balance[s] = balance_of(per[s]);
-                stream_estimate[s] = estimate_of(per[s]);
-                continue;
-            }
-            // The heuristics' own estimate; optimal-direct's with the whole's α.
-            stream_of(all, s, direct, stream_balance[s], stream_estimate[s]);
-        }
-    const bool use_balance =
-        !active.all.empty() && by_stream && optimal &&
-        balance_is_better(stream_estimate, stream_balance, stream_rounds, inflation);
-    if (!active.all.empty()) total += use_balance ? balance_of(all) : whole;
-    Vec3 delta_total;
-    for (const Vec3& d : delta_sum) delta_total += d;
-    total += delta_total / double(rounds);
-    if (rounds > 1) {  // the delta lights' mean over positions, as independent draws
-        const Vec3 m = delta_total / double(rounds);
-        const Vec3 spread = delta_sum2 / double(rounds) - Vec3(m.x * m.x, m.y * m.y, m.z * m.z);
-        own_variance += Vec3(std::max(0.0, spread.x), std::max(0.0, spread.y),
-                             std::max(0.0, spread.z)) / double(rounds - 1);
-    }
-
-    Vec3 error_variance = own_variance;
-    if (by_stream) {
-        // Var(mean) = Σ m_s (e_s − ē)² / ((S − 1) M): the streams' estimates e_s
-        // are independent with variance σ²/m_s.
-        Vec3 e[K], mean;
-        for (int s = 0; s < K; ++s) {
-            if (!stream_rounds[s]) continue;
-            e[s] = delta_sum[s] / double(stream_rounds[s]);
-            if (!active.all.empty()) e[s] += use_balance ? stream_balance[s] : stream_estimate[s];
-            mean += e[s] * (double(stream_rounds[s]) / rounds);
-        }
-        error_variance = Vec3();
-        for (int s = 0; s < K; ++s) {
-            if (!stream_rounds[s]) continue;
-            const Vec3 d = e[s] - mean;
-            error_variance += Vec3(d.x * d.x, d.y * d.y, d.z * d.z) * double(stream_rounds[s]);
-        }
-        error_variance = error_variance / (double(streams_used - 1) * rounds);
-    }
+    Vec3 own_variance, error_variance;
+    const Vec3 total = point_estimate(active, plan, all, per, delta, own_variance, error_variance);
     for (int c = 0; c < 3; ++c) {
         value[c] = total[c];
         if (variance) variance[c] = error_variance[c];
