@@ -448,9 +448,15 @@ void Baker::run_pass(const Pass& pass) {
 // The next pass of the schedule, cut to what the time budget still fits (as
 // the passes so far predict its duration); false when the bake ends here.
 bool Baker::plan_pass(Pass& pass) {
+    // A pass meant to take the time left ends the bake, unless the prediction
+    // behind it was pessimistic (early passes carry the warm-up) and a tenth
+    // of the budget or more is still left: a budget is time to use.
     if (time_ends_) {
-        status_ = BakeStatus::TimeBudget;
-        return false;
+        if (settings_.time_budget - elapsed() < 0.1 * settings_.time_budget) {
+            status_ = BakeStatus::TimeBudget;
+            return false;
+        }
+        time_ends_ = false;
     }
     pass.first_round = done_rounds_;
     if (done_rounds_ < budget_.full_rounds) {
