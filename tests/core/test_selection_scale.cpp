@@ -7,6 +7,7 @@
 
 #include "math/random.h"
 #include "render/light_selection.h"
+#include "sampler_check.h"
 
 using namespace omis;
 
@@ -59,36 +60,22 @@ std::vector<std::uint32_t> all_ids(std::size_t n) {
     return ids;
 }
 
-// Pearson's statistic of N draws against the pmfs, lights expected < 5 times
-// pooled; returns it with its degrees of freedom.
-std::pair<double, int> chi_square(const LightSelector& s, const Vec3& x, const Vec3& n,
-                                  const std::vector<double>& pmf, int N, Pcg32& rng) {
-    std::vector<double> count(pmf.size());
+// p-value of Pearson's chi-square of N draws against the pmfs (the shared
+// checker's: lights expected < 5 times pooled); a light of pmf 0 is never drawn.
+double draws_pvalue(const LightSelector& s, const Vec3& x, const Vec3& n,
+                    const std::vector<double>& pmf, int N, Pcg32& rng) {
+    std::vector<double> count(pmf.size()), expected(pmf.size());
     for (int i = 0; i < N; ++i) {
         const auto pick = s.sample(x, n, rng.next_double());
         REQUIRE(pick);  // every draw ends at a light
         REQUIRE(pick->pmf == Approx(pmf[pick->light]).epsilon(1e-12));
         count[pick->light] += 1;
     }
-    double chi2 = 0, pooled_expected = 0, pooled_count = 0;
-    int df = -1;
     for (std::size_t l = 0; l < pmf.size(); ++l) {
-        const double expected = N * pmf[l];
-        if (expected < 5) {
-            pooled_expected += expected;
-            pooled_count += count[l];
-            if (expected == 0) REQUIRE(count[l] == 0);
-            continue;
-        }
-        chi2 += (count[l] - expected) * (count[l] - expected) / expected;
-        ++df;
+        expected[l] = N * pmf[l];
+        if (pmf[l] == 0) REQUIRE(count[l] == 0);
     }
-    if (pooled_expected >= 5) {
-        chi2 += (pooled_count - pooled_expected) * (pooled_count - pooled_expected) /
-                pooled_expected;
-        ++df;
-    }
-    return {chi2, df};
+    return testing::chi_square_pvalue(count, expected);
 }
 
 }  // namespace
@@ -121,13 +108,10 @@ TEST_CASE("light tree pmfs sum to 1 and match drawing frequencies among many lig
             // 3000 lights: 1 within a few thousand ulps.
             CHECK(total == Approx(1.0).epsilon(1e-12));
             if (p % 40 == 0) {
-                // Chi-square: mean df, standard deviation √(2 df) for df
-                // degrees of freedom; 5σ above the mean (a fixed-seed
-                // false alarm far below 1e-4) fails a pmf that is off by a
-                // few per cent on the lights drawn a few hundred times.
-                const auto [chi2, df] = chi_square(s, x, n, pmf, 200000, rng);
-                REQUIRE(df > 0);
-                CHECK(chi2 < df + 5 * std::sqrt(2.0 * df));
+                // At significance kAlpha (a fixed-seed false alarm below
+                // 1e-4), 200k draws fail a pmf that is off by a few per cent
+                // on the lights drawn a few hundred times.
+                CHECK(draws_pvalue(s, x, n, pmf, 200000, rng) > testing::kAlpha);
                 ++checked_draws;
             }
         }
