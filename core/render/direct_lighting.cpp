@@ -242,16 +242,9 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
 
 std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCache& cache,
                                                               double u1, double u2) {
-    const SolidAngleCache* c = &cache;
-    // The same draw as RectLight/TriangleLight::sample_solid_angle, from the cache.
-    if (c->rect) {
-        const DirSample s = c->rect->sample(u1, u2);
-        return LightSample{s.dir, s.dist, 1.0 / c->rect->solid_angle()};
-    }
-    if (c->triangle) {
-        const DirSample s = c->triangle->sample(u1, u2);
-        return LightSample{s.dir, s.dist, 1.0 / c->triangle->solid_angle()};
-    }
+    // RectLight/TriangleLight::sample_solid_angle's draw, from the prepared shape.
+    if (cache.rect) return uniform_solid_angle_sample(*cache.rect, u1, u2);
+    if (cache.triangle) return uniform_solid_angle_sample(*cache.triangle, u1, u2);
     return std::nullopt;
 }
 

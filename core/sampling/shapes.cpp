@@ -84,8 +84,7 @@ std::optional<LightSample> RectLight::sample_solid_angle(const Vec3& x, double u
                                                          double u2) const {
     const auto sr = SphericalRect::make(x, corner, edge_u, edge_v);
     if (!sr) return std::nullopt;
-    const DirSample s = sr->sample(u1, u2);
-    return LightSample{s.dir, s.dist, 1.0 / sr->solid_angle()};
+    return uniform_solid_angle_sample(*sr, u1, u2);
 }
 
 double RectLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
@@ -160,8 +159,7 @@ std::optional<LightSample> TriangleLight::sample_solid_angle(const Vec3& x, doub
                                                              double u2) const {
     const auto st = SphericalTriangle::make(x, p0, p1, p2);
     if (!st) return std::nullopt;
-    const DirSample s = st->sample(u1, u2);
-    return LightSample{s.dir, s.dist, 1.0 / st->solid_angle()};
+    return uniform_solid_angle_sample(*st, u1, u2);
 }
 
 double TriangleLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {

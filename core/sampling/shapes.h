@@ -22,6 +22,14 @@ struct LightSample {
     double pdf = 0;
 };
 
+// A draw uniform in solid angle from a shape prepared at a point (SphericalRect,
+// SphericalTriangle): the one form that lights and per-point caches share.
+template <class SphericalShape>
+LightSample uniform_solid_angle_sample(const SphericalShape& shape, double u1, double u2) {
+    const DirSample s = shape.sample(u1, u2);
+    return LightSample{s.dir, s.dist, 1.0 / shape.solid_angle()};
+}
+
 // Ray hit: distance and the shape's own parametrisation of the hit point (used for
 // inversion and for binning in tests).
 struct ShapeHit {

@@ -61,10 +61,11 @@ const Case kCases[] = {
     {Vec3(-0.4, 0.2, 0.05), Vec3(0, 0, -1), 2.0},              // 5 cm from it
 };
 
-// The weight's design accuracy, 1 %: a selection weight need not be exact,
-// but one that ignored the spread's shape is off by up to 2× here, and one
-// with too coarse cells by 2–9 % (measured with 4 × 4 cells).
-constexpr double kTolerance = 0.01;
+// The weight's design accuracy, 10 %: a selection weight's error moves noise,
+// never the mean, and it is computed per texel and pass — a 1 % design (6²/8²
+// cells) cost 4× the samples per texel on the race's spread scenes. One that
+// ignored the spread's shape is off by up to 2× here.
+constexpr double kTolerance = 0.10;
 
 }  // namespace
 
@@ -83,6 +84,7 @@ TEST_CASE("the unoccluded weight of a rect with spread is its spread-weighted ir
             c.x, c.n, normal, c.spread, [&](double a, double b) { return corner + eu * a + ev * b; },
             [](double, double) { return true; }, a0, a1, b0, b1, 2.0);
         REQUIRE(exact > 0);
+        INFO("relative error " << unoccluded_irradiance(l, c.x, c.n) / exact - 1);
         CHECK(unoccluded_irradiance(l, c.x, c.n) == Approx(exact).epsilon(kTolerance));
     }
 }
@@ -107,6 +109,7 @@ TEST_CASE("the unoccluded weight of an ellipse with spread is its spread-weighte
             CHECK(unoccluded_irradiance(l, c.x, c.n) == 0);
             continue;
         }
+        INFO("relative error " << unoccluded_irradiance(l, c.x, c.n) / exact - 1);
         CHECK(unoccluded_irradiance(l, c.x, c.n) == Approx(exact).epsilon(kTolerance));
     }
 }
