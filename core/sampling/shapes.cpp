@@ -4,8 +4,21 @@
 #include <limits>
 
 namespace omis {
-
 namespace {
+
+// A polygon's projected-solid-angle draw and its pdf at a direction that hits
+// it, as RectLight and TriangleLight share them (none where nothing projects).
+std::optional<LightSample> projected_sample(const std::optional<ProjectedPolygon>& pp,
+                                            double u1, double u2) {
+    if (!pp) return std::nullopt;
+    const DirSample s = pp->sample(u1, u2);
+    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+}
+
+double projected_pdf(const std::optional<ProjectedPolygon>& pp, const Vec3& w) {
+    return pp ? pp->pdf_hit(w) : 0.0;
+}
+
 
 constexpr double kTol = 1e-7;  // relative slack of hit tests for samples on an edge
 
@@ -117,16 +130,11 @@ std::optional<ProjectedPolygon> RectLight::projected(const Vec3& x, const Vec3& 
 
 std::optional<LightSample> RectLight::sample_projected(const Vec3& x, const Vec3& n, double u1,
                                                        double u2) const {
-    const auto pp = projected(x, n);
-    if (!pp) return std::nullopt;
-    const DirSample s = pp->sample(u1, u2);
-    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+    return projected_sample(projected(x, n), u1, u2);
 }
 
 double RectLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
-    if (!intersect(x, w)) return 0;
-    const auto pp = projected(x, n);
-    return pp ? pp->pdf_hit(w) : 0.0;
+    return intersect(x, w) ? projected_pdf(projected(x, n), w) : 0.0;
 }
 
 // ----------------------------------------------------------------- triangle
@@ -191,16 +199,11 @@ std::optional<ProjectedPolygon> TriangleLight::projected(const Vec3& x, const Ve
 
 std::optional<LightSample> TriangleLight::sample_projected(const Vec3& x, const Vec3& n,
                                                            double u1, double u2) const {
-    const auto pp = projected(x, n);
-    if (!pp) return std::nullopt;
-    const DirSample s = pp->sample(u1, u2);
-    return LightSample{s.dir, s.dist, pp->pdf_hit(s.dir)};
+    return projected_sample(projected(x, n), u1, u2);
 }
 
 double TriangleLight::pdf_projected(const Vec3& x, const Vec3& n, const Vec3& w) const {
-    if (!intersect(x, w)) return 0;
-    const auto pp = projected(x, n);
-    return pp ? pp->pdf_hit(w) : 0.0;
+    return intersect(x, w) ? projected_pdf(projected(x, n), w) : 0.0;
 }
 
 // ------------------------------------------------------------------ ellipse
