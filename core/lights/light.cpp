@@ -186,6 +186,19 @@ std::optional<RectLight> rect_reaching(const Light& l, const Vec3& x) {
                      r.edge_v * (v1 - v0)};
 }
 
+bool ellipse_wholly_reaches(const Light& l, const Vec3& x) {
+    return l.type == LightType::Ellipse && ellipse_reach(l, x).whole;
+}
+
+bool ray_crosses_light(const Light& l, const Vec3& x, const Vec3& w) {
+    switch (l.type) {
+        case LightType::Rect: return l.rect.intersect(x, w).has_value();
+        case LightType::Ellipse: return l.ellipse.intersect(x, w).has_value();
+        case LightType::Triangle: return l.triangle.intersect(x, w).has_value();
+        default: return true;
+    }
+}
+
 const char* light_type_name(LightType type) {
     switch (type) {
         case LightType::Rect: return "rect";
