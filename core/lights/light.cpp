@@ -81,16 +81,25 @@ void require_perpendicular(const Vec3& a, const Vec3& b, const char* what) {
 
 // Blender's spread (SPEC §4): radiance × max(0, 1 − tan a tan θ) × normalisation,
 // a = (π − s)/2. The normalisation 2/(2 + (2a − π) tan a) equals 1/(1 − b cot b)
-// with b = s/2, evaluated by its series where it would cancel.
+// with b = s/2, evaluated by its series where it would cancel. The two
+// constants are the light's: prepared once where many points are weighed.
+struct SpreadProfile {
+    double tan_a = 0, one_minus_b_cot_b = 1;
+    explicit SpreadProfile(double spread) {
+        const double b = 0.5 * spread;
+        one_minus_b_cot_b = b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
+        tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
+    }
+    double factor(double cos_theta) const {
+        const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
+        const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
+        return std::max(0.0, 1 - tan_a * tan_theta) / one_minus_b_cot_b;
+    }
+};
+
 double spread_factor(double cos_theta, double spread) {
     if (spread >= kPi) return 1.0;
-    const double b = 0.5 * spread;
-    const double one_minus_b_cot_b =
-        b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
-    const double tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
-    const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
-    const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
-    return std::max(0.0, 1 - tan_a * tan_theta) / one_minus_b_cot_b;
+    return SpreadProfile(spread).factor(cos_theta);
 }
 
 // Cycles 3.4 spot falloff for the unit direction from the light to the
@@ -630,6 +639,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                                   int cells) {
     constexpr int kTaps = 3, kEdgeTaps = 4;
     const Vec3 normal = normalize(planar_normal(l));
+    const SpreadProfile spread(l.spread);
     const double da = (a1 - a0) / cells, db = (b1 - b0) / cells;
     // Kernel-weighted mean of the spread factor over a cell; `mixed` tells
     // whether the shape's edge crossed it.
@@ -649,7 +659,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                 if (!(d2 > 0) || cos_l <= 0 || cos_x <= 0) continue;
                 const double kernel = cos_l * cos_x / (d2 * d2);
                 k += kernel;
-                if (is_in) gk += kernel * spread_factor(cos_l / std::sqrt(d2), l.spread);
+                if (is_in) gk += kernel * spread.factor(cos_l / std::sqrt(d2));
             }
         mixed = in > 0 && in < taps * taps;
         return k > 0 ? gk / k : 0.0;

@@ -75,6 +75,12 @@ struct PointLighting::Impl {
         std::uint64_t mask = 0, light_mask = 0;
     };
     void choose_active(const SurfacePoint& centre, const Footprint* footprint, Active& active);
+    // choose_active through the context's texel tables: with `keep`, a point
+    // shaded before (same stream) takes its techniques and tables from there,
+    // and one shaded first leaves them there for its next pass.
+    void active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
+                    const Footprint* footprint, Active& active);
+    void restore(const TexelTables::Entry& kept, Active& active);
     Vec3 delta_lighting(const SurfacePoint& p, double u);
     struct Estimators {
         MisEstimator* main;
@@ -564,6 +570,46 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
     }
 }
 
+void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
+                                     const Footprint* footprint, Active& active) {
+    TexelTables& kept = p_.texel_tables;
+    if (keep)
+        if (const TexelTables::Entry* entry = kept.find(stream)) {
+            restore(*entry, active);
+            return;
+        }
+    choose_active(centre, footprint, active);
+    if (!keep) return;
+    TexelTables::Entry entry;
+    entry.mask = active.mask;
+    entry.light_mask = active.light_mask;
+    for (int k : active.lights)
+        if (!p_.selector(p_.settings.techniques[k].selection))
+            entry.tables.push_back({k, choices_[k].lights, choices_[k].probability});
+    kept.keep(stream, std::move(entry));
+}
+
+// choose_active's result from a kept entry: the same techniques in the same
+// order, and each table with the CDF choose_lights(_over) sums from it.
+void PointLighting::Impl::restore(const TexelTables::Entry& kept, Active& active) {
+    active.mask = kept.mask;
+    active.light_mask = kept.light_mask;
+    for (int k : p_.techniques) {
+        const std::uint64_t bit = std::uint64_t(1) << k;
+        if (kept.mask & bit) active.all.push_back(k);
+        if (kept.light_mask & bit) active.lights.push_back(k);
+    }
+    for (const TexelTables::Table& t : kept.tables) {
+        LightChoice& c = choices_[t.technique];
+        c.lights = t.lights;
+        c.probability = t.probability;
+        c.cdf.clear();
+        double running = 0;
+        for (double w : c.probability) c.cdf.push_back(running += w);
+        c.cdf.back() = 1.0;
+    }
+}
+
 // Delta lights are not integrated: one shadow ray each when they are few; when
 // they are many (plan.sample_delta_lights), their sum is estimated by drawing
 // delta_samples lights from the light tree, u rotated over [0, 1) for each,
@@ -942,7 +988,8 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     const int* counts = counts_in ? counts_in : p_.settings.samples.data();
     ++point_serial_;  // invalidates the per-point solid-angle cache
     Active active;
-    choose_active(centre, footprint, active);
+    // Bakes shade a texel again at each pass (and a footprint's tables cost).
+    active_for(stream, footprint || first_round > 0, centre, footprint, active);
 
     // Round r belongs to stream r mod K; each (technique, stream) has its own
     // scrambled sequence, continued from round to round. Delta lights, when

@@ -15,6 +15,7 @@
 #include "render/receiver.h"
 #include "render/light_selection.h"
 #include "render/scene.h"
+#include "render/texel_tables.h"
 
 namespace omis {
 
@@ -75,6 +76,9 @@ public:
     // estimates their sum by drawing some (plan.sample_delta_lights).
     LightSelector uniform_selector, power_selector, tree_selector, delta_selector;
     const LightSelector* selector(LightSelection selection) const;
+    // Per texel (PointLighting::shade's stream), what a bake's later passes
+    // reuse: the techniques taking part and their light tables.
+    mutable TexelTables texel_tables;
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes
