@@ -216,6 +216,16 @@ struct PointLighting::Impl {
         Vec3 w;
     } drawn_;  // the last light sample: its light surely lies along its direction
     LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
+    // The texel being shaded as a region (LightSelector::Receiver): a ball
+    // about its centre through its footprint's corners (radius 0: none).
+    // Selectors draw with the region's pmfs at every sample inside it — one
+    // set per texel, kept in region_memo_ — instead of walking the tree
+    // afresh at each sample's own position.
+    LightSelector::Receiver region_;
+    LightSelector::Memo region_memo_;
+    void set_region(const SurfacePoint& centre, const Footprint* footprint);
+    LightSelector::Receiver receiver_at(const Vec3& x, const Vec3& n,
+                                        LightSelector::Memo*& memo);
 };
 
 const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
@@ -390,7 +400,11 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
                                                              const Vec3& n, double u) {
     const Technique& t = p_.settings.techniques[k];
-    if (const LightSelector* s = p_.selector(t.selection)) return s->sample(x, n, u, &memo_);
+    if (const LightSelector* s = p_.selector(t.selection)) {
+        LightSelector::Memo* memo;
+        const LightSelector::Receiver at = receiver_at(x, n, memo);
+        return s->sample(at, u, memo);
+    }
     const LightChoice& c = choices_[k];
     const std::size_t i = std::min<std::size_t>(
         std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1);
@@ -503,10 +517,12 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         double pdf = 0;
         const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
         const std::vector<std::uint32_t>& along = along_.lights;
+        LightSelector::Memo* memo;
+        const LightSelector::Receiver at = receiver_at(x, n, memo);
         for (std::size_t i = 0; i < along.size(); ++i)
             // The shape's density first: it is 0 for most extra candidates,
             // and then the tree need not be walked.
-            if (shape[i] > 0) pdf += s->pmf(x, n, along[i], &memo_) * shape[i];
+            if (shape[i] > 0) pdf += s->pmf(at, along[i], memo) * shape[i];
         return pdf;
     }
     const LightChoice& c = choices_[k];
@@ -570,8 +586,38 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
     }
 }
 
+// The ball about the centre through the footprint's farthest corner holds
+// the whole footprint where it is flat (a parallelogram); a sample outside
+// it (a footprint bent over a crease) is drawn for its own position.
+void PointLighting::Impl::set_region(const SurfacePoint& centre, const Footprint* footprint) {
+    region_ = {centre.x, centre.n, 0.0};
+    if (!footprint) return;
+    double r2 = 0;
+    for (double u : {0.0, 1.0})
+        for (double v : {0.0, 1.0}) {
+            const Vec3 d = footprint->at(u, v).x - centre.x;
+            r2 = std::max(r2, dot(d, d));
+        }
+    region_.radius = std::sqrt(r2);
+}
+
+// Sampling and the densities at a sample both ask here with the sample's x,
+// so both use the same rule there: the region's pmfs inside it, x's own
+// outside. Either is a valid selection at x (light_selection.h).
+LightSelector::Receiver PointLighting::Impl::receiver_at(const Vec3& x, const Vec3& n,
+                                                         LightSelector::Memo*& memo) {
+    const Vec3 d = x - region_.x;
+    if (region_.radius > 0 && dot(d, d) <= region_.radius * region_.radius) {
+        memo = &region_memo_;
+        return region_;
+    }
+    memo = &memo_;
+    return {x, n, 0.0};
+}
+
 void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
                                      const Footprint* footprint, Active& active) {
+    set_region(centre, footprint);
     TexelTables& kept = p_.texel_tables;
     if (keep)
         if (const TexelTables::Entry* entry = kept.find(stream)) {
