@@ -37,18 +37,27 @@ constexpr double kEmitterDepthTolerance = 1e-4;
 // pdf evaluation makes the same choice as sampling.
 constexpr double kTinySolidAngle = 1e-3;
 
-bool tiny_in_solid_angle(const Light& light, const Vec3& x) {
+// Where a light's size is compared (its centroid) and its area / kTinySolidAngle
+// (infinite: never tiny), kept per light in the context: a compact record
+// instead of a read of the whole Light among 100k (a cache miss each).
+LightingContext::TinyShape tiny_shape_of(const Light& light) {
+    LightingContext::TinyShape s;
     if (light.type == LightType::Triangle) {
         const TriangleLight& t = light.triangle;
-        const Vec3 d = (t.p0 + t.p1 + t.p2) / 3.0 - x;
-        return t.area() < kTinySolidAngle * dot(d, d);
+        s.centroid = (t.p0 + t.p1 + t.p2) / 3.0;
+        s.area_limit = t.area() / kTinySolidAngle;
     }
     if (light.type == LightType::Rect) {
         const RectLight& r = light.rect;
-        const Vec3 d = r.corner + (r.edge_u + r.edge_v) * 0.5 - x;
-        return r.area() < kTinySolidAngle * dot(d, d);
+        s.centroid = r.corner + (r.edge_u + r.edge_v) * 0.5;
+        s.area_limit = r.area() / kTinySolidAngle;
     }
-    return false;
+    return s;
+}
+
+bool tiny_in_solid_angle(const LightingContext::TinyShape& shape, const Vec3& x) {
+    const Vec3 d = shape.centroid - x;
+    return shape.area_limit < dot(d, d);
 }
 
 // A light technique at one point (`unoccluded`, exact per light): the lights
@@ -257,7 +266,8 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
                                                        const Vec3& x, const Vec3& n, double u1,
                                                        double u2) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
+    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(p_.tiny_shapes[l], x))
+        sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
         sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
     std::optional<LightSample> s;
@@ -282,7 +292,8 @@ std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCa
 double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w) {
     const Light& light = p_.scene.lights()[l];
-    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
+    if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(p_.tiny_shapes[l], x))
+        sampler = ShapeSampler::Area;
     // A direction that misses the light has density 0 there: no need to
     // prepare its shape at x (the hit test's slack keeps the edge).
     if (sampler == ShapeSampler::SolidAngle && !solid_angle_ready(l) &&
@@ -1138,6 +1149,7 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         const Light& light = scene.lights()[l];
         (light.is_delta() ? delta : integrated).push_back(l);
         power.push_back(light.power(scene.bounding_radius()));
+        tiny_shapes.push_back(tiny_shape_of(light));
     }
     const double radius = scene.bounding_radius();
     // Few lights: `uniform` and `power` keep their per-point tables over the

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -71,6 +72,13 @@ public:
     std::vector<int> techniques;  // enabled technique indices
     std::vector<std::uint32_t> integrated, delta;
     std::vector<double> power;  // per light, for `power` selection
+    // Per light, what tells whether a rect or triangle is tiny in solid angle
+    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp).
+    struct TinyShape {
+        Vec3 centroid;
+        double area_limit = std::numeric_limits<double>::infinity();
+    };
+    std::vector<TinyShape> tiny_shapes;
     // Selection of integrated lights for `uniform`, `power` and `tree`
     // (built when a technique uses it), and of delta lights when the plan
     // estimates their sum by drawing some (plan.sample_delta_lights).
