@@ -156,6 +156,10 @@ public:
     // first_round. The variance comes from the spread between the streams'
     // estimates when at least two hold rounds, else from the estimator's own
     // (independent-draw) formula.
+    // stream names the point within the context: with a footprint, or from
+    // its second call on (first_round > 0), the point's techniques and light
+    // tables are kept under it (LightingContext::texel_tables) and reused, so
+    // one stream must always mean the same point and footprint.
     // footprint: null = every sample at `centre`; else each sample draws its
     // own position from it (delta lights then take one position per round).
     // counts: samples per technique in each of these rounds (null = the
