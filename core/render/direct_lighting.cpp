@@ -643,6 +643,10 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     for (int k : active.lights)
         if (!p_.selector(p_.settings.techniques[k].selection))
             entry.tables.push_back({k, choices_[k].lights, choices_[k].probability});
+    // Only where a table was made: selectors' techniques are cheap to find
+    // again, and an entry for every texel of a large map would spend the
+    // budget on them.
+    if (entry.tables.empty()) return;
     kept.keep(stream, std::move(entry));
 }
 

@@ -6,6 +6,8 @@
 // pass instead of recomputed: a spread light's weights (SPEC §3's spread-
 // weighted irradiance at up to five probes) cost more than a one-round pass's
 // samples. A table kept is the one recomputation would give, bit for bit.
+// Texels whose light techniques all draw from selectors keep nothing (cheap
+// to work out again).
 //
 // Shared by the threads of one lighting job: a texel is shaded by one thread
 // at a time, and entries are only added, never changed or removed. Memory is
