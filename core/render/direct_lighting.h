@@ -18,6 +18,8 @@
 
 namespace omis {
 
+class AllocationPilot;
+
 struct DirectLightingSettings {
     std::vector<Technique> techniques;
     std::vector<int> samples;  // per technique, per round
@@ -110,6 +112,14 @@ public:
 // estimates measures the error of correlated low-discrepancy draws honestly.
 constexpr int kSampleStreams = 4;
 
+// Rounds a point drew earlier with other counts than the settings' (sample
+// allocation between passes, issue 10): a later call continues every
+// technique's sequences after the draws these took.
+struct DrawnRounds {
+    int first_round = 0, rounds = 0;
+    const int* counts = nullptr;  // per technique and round; null: the settings'
+};
+
 // Shades one point at a time; one per thread, as it keeps scratch memory.
 class PointLighting {
 public:
@@ -136,12 +146,22 @@ public:
     // but too high for correlated draws): callers may pool the ratio of the
     // two over neighbouring points. variance may be null (then the streams
     // are not compared, which saves their estimators).
+    // earlier: every call before this one for the same point, in order, when
+    // their counts were not all the settings' (their rounds must add up to
+    // first_round; std::invalid_argument otherwise).
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
-               const int* counts = nullptr, double own_variance[3] = nullptr);
+               const int* counts = nullptr, double own_variance[3] = nullptr,
+               const std::vector<DrawnRounds>* earlier = nullptr);
     // A fixed point x with shading normal n and geometric normal ng.
     void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
+
+    // While set, every sample of the points shaded goes to `pilot` too (its
+    // techniques are the settings', its integrand the luminance of f) with
+    // its work (1 + the rays it traced); the caller ends each point
+    // (AllocationPilot::end_point). Null stops recording.
+    void record_into(AllocationPilot* pilot);
 
     LightingCounters counters;
 
