@@ -249,11 +249,12 @@ struct Pass {
 // (at most kPilotSamples, so choosing costs little beside shading), and the
 // tile's shares follow from them (mis/allocation.h). Later passes draw the
 // same samples per texel as without allocation, in rounds of at least
-// kMinAllocatedRound samples split by those shares, each technique keeping
-// at least kAllocationFloor of them and one sample a round: a technique that
+// kMinAllocatedRound samples (and kRoundPerTechnique per technique, so that
+// the shares can move) split by those shares, each technique keeping at
+// least kAllocationFloor of them and one sample a round: a technique that
 // alone covers what the pilot did not see keeps drawing (a defensive mix).
 constexpr int kPilotSamples = 2048;
-constexpr int kMinAllocatedRound = 8;
+constexpr int kMinAllocatedRound = 8, kRoundPerTechnique = 4;
 constexpr double kAllocationFloor = 0.05;
 
 // A tile's shares and every call its points took so far (the sequences of a
@@ -527,14 +528,17 @@ void Baker::pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass
 
 // A later pass of an allocated tile: the pass's samples per texel in rounds
 // of the tile's shares — as many rounds as keep at least kMinAllocatedRound
-// samples each (a pass's last partial round: one round).
+// samples each, kRoundPerTechnique a technique (a pass's last partial round:
+// one round).
 Pass Baker::allocated_pass(TileAllocation& t, const Pass& pass) {
     const int P = budget_.per_round;
+    const int least = std::max<int>(kMinAllocatedRound,
+                                    kRoundPerTechnique * int(context_.techniques.size()));
     int rounds = 1;
     if (!pass.counts) {
         int group = pass.rounds;  // settings rounds per allocated round
         for (int g = 1; g <= pass.rounds; ++g)
-            if (pass.rounds % g == 0 && g * P >= kMinAllocatedRound) {
+            if (pass.rounds % g == 0 && g * P >= least) {
                 group = g;
                 break;
             }

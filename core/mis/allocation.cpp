@@ -200,7 +200,7 @@ std::vector<double> optimal_shares(const AllocationPilot& pilot, const std::vect
     project(w, allowed, 0.0);
     std::vector<double> best = w;
     double best_value = pilot.optimal_variance(w, &g) * time(w);
-    for (int iteration = 0; iteration < 40; ++iteration) {
+    for (int iteration = 0; iteration < 20; ++iteration) {
         const double v = pilot.optimal_variance(w, &g), t = time(w);
         if (!(v > 0) || !std::isfinite(v)) break;  // nothing to reduce
         if (iteration > 0 && v * t < best_value) {
@@ -216,7 +216,7 @@ std::vector<double> optimal_shares(const AllocationPilot& pilot, const std::vect
         project(next, allowed, min_share);
         for (int k = 0; k < N; ++k) change = std::max(change, std::abs(next[k] - w[k]));
         w = next;
-        if (change < 1e-4) break;
+        if (change < 1e-3) break;  // finer than any round's counts resolve
     }
     const double last = pilot.optimal_variance(w) * time(w);
     if (last < best_value) best = w;

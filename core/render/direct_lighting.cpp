@@ -509,7 +509,14 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
                                              std::uint64_t key, const std::vector<int>& active,
                                              const int* counts, bool fresh) {
     auto it = cache.find(key);
-    if (it != cache.end() && fresh) {
+    // Counts other than the settings' (a final partial pass, an allocated
+    // tile's): kept while the next point asks for the same.
+    auto same_counts = [&](const MisEstimator& e) {
+        for (std::size_t a = 0; a < active.size(); ++a)
+            if (e.counts()[a] != counts[active[a]]) return false;
+        return true;
+    };
+    if (it != cache.end() && fresh && !same_counts(it->second)) {
         cache.erase(it);
         it = cache.end();
     }

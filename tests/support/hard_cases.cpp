@@ -138,10 +138,12 @@ std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, St
 namespace {
 
 // Rounds of the allocated call: the fewest settings rounds per allocated round
-// that hold at least 8 samples and divide the rounds left (as the baker).
+// that hold at least 8 samples, 4 a technique, and divide the rounds left (as
+// the baker; here one sample per technique a round).
 int allocated_rounds(int rounds_left, int per_round) {
+    const int least = std::max(8, 4 * per_round);
     for (int g = 1; g <= rounds_left; ++g)
-        if (rounds_left % g == 0 && g * per_round >= 8) return rounds_left / g;
+        if (rounds_left % g == 0 && g * per_round >= least) return rounds_left / g;
     return 1;
 }
 
@@ -186,7 +188,8 @@ AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strate
             pilot.end_point(y > 0 ? 1 / y : 0.0, pilot_rounds);
         }
         shader.record_into(nullptr);
-        const std::vector<double> shares = optimal_shares(pilot, pilot.cost(), floor);
+        std::vector<double> shares = optimal_shares(pilot, pilot.cost(), floor);
+        if (getenv("OMIS_ALLOC_KEEP")) shares.assign(T, 1.0);  // PROBE
         for (int t = 0; t < T; ++t) out.shares[t] += shares[t] / copies;
         const int left = spp - pilot_rounds;
         const int rounds = allocated_rounds(left, T);

@@ -39,8 +39,8 @@ std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, St
 // points as the tile: `pilot_rounds` rounds of one sample per technique
 // recorded into one pilot (each point's integrand scaled by 1/its estimate),
 // shares from it (mis/allocation.h, floor `floor`), then the remaining
-// spp − pilot_rounds rounds' samples in rounds of at least 8 split by those
-// shares; a point's value is the two calls' sample-weighted mean.
+// spp − pilot_rounds rounds' samples in rounds of at least 8 (4 a technique)
+// split by those shares; a point's value is the two calls' sample-weighted mean.
 // pilot_rounds = 0: one call of spp rounds of one sample each (fixed counts).
 // Serial; seconds, if given, receives the shading time. Same streams and
 // layout as run().
