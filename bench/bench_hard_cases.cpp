@@ -99,8 +99,9 @@ int allocation_sweep(int copies) {
 // against fixed counts at equal samples, per case and spp: optimal-direct's
 // MSE with allocation (a quarter of the rounds as the pilot, the copy's 8
 // points as the tile) over its MSE with one sample per technique per round,
-// the shading-time ratio of the two (serial, one run, the least of three),
-// and their product —
+// (and over the same pilot and later call keeping one sample per technique
+// a round: the choice alone), the shading-time ratio of allocation to fixed
+// counts (serial, one run, the least of three), and their product —
 // the ratio of variance at equal time (< 1: allocation wins).
 int allocation_gain(int copies, const std::vector<int>& spps) {
     std::printf("sample allocation vs fixed counts, optimal-direct, %d copies of 8 points\n"
@@ -118,26 +119,37 @@ int allocation_gain(int copies, const std::vector<int>& spps) {
         for (int spp : spps) {
             // Three interleaved repetitions (the same values), the least time
             // of each: a burst of load on the shared machine hits one, not all.
-            AllocatedRun fixed, alloc;
+            AllocatedRun fixed, kept, alloc;
             for (int rep = 0; rep < 3; ++rep) {
                 const AllocatedRun f =
                     run_allocated(scene, hc, Strategy::OptimalDirect, spp, 0, copies, 42);
+                const AllocatedRun k = run_allocated(scene, hc, Strategy::OptimalDirect, spp,
+                                                     spp / 4, copies, 42, false);
                 const AllocatedRun a =
                     run_allocated(scene, hc, Strategy::OptimalDirect, spp, spp / 4, copies, 42);
                 if (rep == 0 || f.seconds < fixed.seconds) fixed = f;
+                if (rep == 0 || k.seconds < kept.seconds) kept = k;
                 if (rep == 0 || a.seconds < alloc.seconds) alloc = a;
             }
             const Errors e_fixed = errors(fixed.values, ref, points, copies);
+            const Errors e_kept = errors(kept.values, ref, points, copies);
             const Errors e_alloc = errors(alloc.values, ref, points, copies);
-            const double ratio = e_alloc.mse / e_fixed.mse;
-            double var = 0;
-            for (std::size_t i = 0; i < e_alloc.squared.size(); ++i) {
-                const double d = e_alloc.squared[i] - ratio * e_fixed.squared[i];
-                var += d * d / (e_alloc.squared.size() - 1);
-            }
+            auto paired = [](const Errors& x, const Errors& y, double& se) {
+                const double ratio = x.mse / y.mse;
+                double var = 0;
+                for (std::size_t i = 0; i < x.squared.size(); ++i) {
+                    const double d = x.squared[i] - ratio * y.squared[i];
+                    var += d * d / (x.squared.size() - 1);
+                }
+                se = std::sqrt(var / x.squared.size()) / y.mse;
+                return ratio;
+            };
+            double se, se_kept;
+            const double ratio = paired(e_alloc, e_fixed, se);
+            const double ratio_kept = paired(e_alloc, e_kept, se_kept);
             const double time = alloc.seconds / fixed.seconds;
-            std::printf("  %4d spp: MSE %6.3f ± %5.3f  time %5.3f  MSE×time %6.3f  shares", spp,
-                        ratio, std::sqrt(var / e_alloc.squared.size()) / e_fixed.mse, time,
+            std::printf("  %4d spp: MSE %6.3f ± %5.3f (vs kept %6.3f ± %5.3f)  time %5.3f  "
+                        "MSE×time %6.3f  shares", spp, ratio, se, ratio_kept, se_kept, time,
                         ratio * time);
             for (double w : alloc.shares) std::printf(" %.2f", w);
             std::printf("\n");

@@ -520,7 +520,6 @@ void Baker::pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass
         const double floor =
             std::min(kAllocationFloor, 0.5 / double(context_.techniques.size()));
         t.shares = optimal_shares(pilot, pilot.cost(), floor);
-        if (getenv("OMIS_ALLOC_KEEP")) t.shares.assign(counts.begin(), counts.end());  // PROBE
     }
     t.drawn.push_back({pass.first_round, pass.rounds, pass.counts});
     t.next_round = pass.first_round + pass.rounds;

@@ -1,7 +1,7 @@
 #include "support/hard_cases.h"
 
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cmath>
 
 #include "mis/allocation.h"
@@ -151,7 +151,7 @@ int allocated_rounds(int rounds_left, int per_round) {
 
 AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strategy strategy,
                            int spp, int pilot_rounds, int copies, std::uint64_t seed,
-                           double floor) {
+                           bool choose, double floor) {
     DirectLightingSettings s;
     for (const auto& name : hard_case.techniques) s.techniques.push_back(*parse_technique(name));
     const int T = int(s.techniques.size());
@@ -165,7 +165,13 @@ AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strate
     AllocatedRun out;
     out.values.assign(std::size_t(points) * copies * 3, 0.0);
     out.shares.assign(T, 0.0);
-    const auto start = std::chrono::steady_clock::now();
+    // CPU time of this thread: the shared machine's load does not enter it.
+    auto cpu_seconds = [] {
+        timespec t;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+        return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+    };
+    const double start = cpu_seconds();
     for (int k = 0; k < copies; ++k) {
         auto shade = [&](int p, int first, int rounds, const int* counts,
                          const std::vector<DrawnRounds>* earlier, double* value) {
@@ -188,8 +194,8 @@ AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strate
             pilot.end_point(y > 0 ? 1 / y : 0.0, pilot_rounds);
         }
         shader.record_into(nullptr);
-        std::vector<double> shares = optimal_shares(pilot, pilot.cost(), floor);
-        if (getenv("OMIS_ALLOC_KEEP")) shares.assign(T, 1.0);  // PROBE
+        const std::vector<double> shares =
+            choose ? optimal_shares(pilot, pilot.cost(), floor) : std::vector<double>(T, 1.0 / T);
         for (int t = 0; t < T; ++t) out.shares[t] += shares[t] / copies;
         const int left = spp - pilot_rounds;
         const int rounds = allocated_rounds(left, T);
@@ -203,7 +209,7 @@ AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strate
             for (int c = 0; c < 3; ++c) v[c] = w * first[std::size_t(p) * 3 + c] + (1 - w) * second[c];
         }
     }
-    out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.seconds = cpu_seconds() - start;
     return out;
 }
 
