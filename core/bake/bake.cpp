@@ -253,7 +253,7 @@ struct Pass {
 // the shares can move) split by those shares, each technique keeping at
 // least kAllocationFloor of them and one sample a round: a technique that
 // alone covers what the pilot did not see keeps drawing (a defensive mix).
-constexpr int kPilotSamples = 2048;
+constexpr int kPilotSamples = 512;
 constexpr int kMinAllocatedRound = 8, kRoundPerTechnique = 4;
 constexpr double kAllocationFloor = 0.05;
 

@@ -200,7 +200,7 @@ std::vector<double> optimal_shares(const AllocationPilot& pilot, const std::vect
     project(w, allowed, 0.0);
     std::vector<double> best = w;
     double best_value = pilot.optimal_variance(w, &g) * time(w);
-    for (int iteration = 0; iteration < 20; ++iteration) {
+    for (int iteration = 0; iteration < 12; ++iteration) {
         const double v = pilot.optimal_variance(w, &g), t = time(w);
         if (!(v > 0) || !std::isfinite(v)) break;  // nothing to reduce
         if (iteration > 0 && v * t < best_value) {

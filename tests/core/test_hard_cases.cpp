@@ -73,3 +73,44 @@ TEST_CASE("hard cases: optimal MIS never loses to balance and is never negative"
         }
     }
 }
+
+TEST_CASE("hard cases: sample allocation's choice never loses more than 2× at equal samples",
+          "[mis][hard]") {
+    // Allocation (issue 10, item 2) against the same two calls keeping one
+    // sample per technique a round (run_allocated, choose = false): the same
+    // pilot, the same samples, only the split of the later ones differs.
+    // The bound is loose on purpose: the allocation minimises the variance of
+    // independent draws, while each technique draws a scrambled Sobol'
+    // sequence whose error falls faster at power-of-two counts — which the
+    // equal split reaches here and a chosen split does not (measured: up to
+    // 1.9 ± 0.4× in the penumbra and dim corner at 64 spp, gains to 0.5×
+    // elsewhere). The floor share bounds any loss in principle (q_w ≥
+    // floor·T·q_equal pointwise, so m(w) ≤ m_equal/(floor·T) ≈ 6.7 m_equal);
+    // 2× is what the suite shows. Paired test as above: mean of
+    // e²_alloc − 2·e²_kept ≤ 3 SE (fixed seeds).
+    for (const HardCase& hc : suite()) {
+        Scene scene;
+        hc.build(scene);
+        scene.commit();
+        const int points = int(hc.points.size());
+        const auto ref = reference(scene, hc, 2048, 8, 777);
+        for (int spp : {16, 64}) {
+            const Errors kept = errors(run_allocated(scene, hc, Strategy::OptimalDirect, spp,
+                                                     spp / 4, kCopies, 5, false).values,
+                                       ref, points, kCopies);
+            const Errors chosen = errors(run_allocated(scene, hc, Strategy::OptimalDirect, spp,
+                                                       spp / 4, kCopies, 5).values,
+                                         ref, points, kCopies);
+            const std::size_t n = chosen.squared.size();
+            double mean = 0, var = 0;
+            for (std::size_t i = 0; i < n; ++i) mean += (chosen.squared[i] - 2 * kept.squared[i]) / n;
+            for (std::size_t i = 0; i < n; ++i) {
+                const double d = chosen.squared[i] - 2 * kept.squared[i] - mean;
+                var += d * d / (n - 1);
+            }
+            INFO(hc.name << ", " << spp << " spp: MSE ratio " << chosen.mse / kept.mse);
+            CHECK(mean <= kSigmas * std::sqrt(var / n));
+            CHECK(chosen.negative == 0);
+        }
+    }
+}
