@@ -148,9 +148,9 @@ int allocation_gain(int copies, const std::vector<int>& spps) {
             const double ratio = paired(e_alloc, e_fixed, se);
             const double ratio_kept = paired(e_alloc, e_kept, se_kept);
             const double time = alloc.seconds / fixed.seconds;
-            std::printf("  %4d spp: MSE %6.3f ± %5.3f (vs kept %6.3f ± %5.3f)  time %5.3f  "
-                        "MSE×time %6.3f  shares", spp, ratio, se, ratio_kept, se_kept, time,
-                        ratio * time);
+            std::printf("  %4d spp: MSE %6.3f ± %5.3f (vs kept %6.3f ± %5.3f)  time %5.3f "
+                        "(kept %5.3f)  MSE×time %6.3f  shares", spp, ratio, se, ratio_kept,
+                        se_kept, time, kept.seconds / fixed.seconds, ratio * time);
             for (double w : alloc.shares) std::printf(" %.2f", w);
             std::printf("\n");
             log_sum += std::log(ratio * time);
