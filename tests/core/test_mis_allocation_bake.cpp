@@ -157,11 +157,12 @@ TEST_CASE("allocation: a later call continues every technique's sequence", "[mis
     shader.shade(5, 0, 8, p, nullptr, whole, nullptr, two);
     shader.shade(5, 0, 4, p, nullptr, first, nullptr, two);
     const std::vector<DrawnRounds> earlier = {{0, 4, two}};
-    shader.shade(5, 4, 4, p, nullptr, second, nullptr, two, nullptr, &earlier);
+    shader.shade(5, 4, 4, p, nullptr, second, nullptr, two, nullptr, nullptr, &earlier);
     shader.shade(5, 4, 4, p, nullptr, repeated, nullptr, two);
     CHECK((first[1] + second[1]) / 2 == Approx(whole[1]).epsilon(1e-12));
     CHECK((first[1] + repeated[1]) / 2 != Approx(whole[1]).epsilon(1e-6));
     const std::vector<DrawnRounds> gap = {{0, 3, two}};
-    CHECK_THROWS_WITH(shader.shade(5, 4, 4, p, nullptr, second, nullptr, two, nullptr, &gap),
-                      Catch::Contains("earlier"));
+    CHECK_THROWS_WITH(
+        shader.shade(5, 4, 4, p, nullptr, second, nullptr, two, nullptr, nullptr, &gap),
+        Catch::Contains("earlier"));
 }

@@ -177,7 +177,7 @@ AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strate
                          const std::vector<DrawnRounds>* earlier, double* value) {
             const Vec3 &x = hard_case.points[p], &n = hard_case.normals[p];
             shader.shade(std::uint64_t(p) * copies + k, first, rounds, SurfacePoint{x, n, n},
-                         nullptr, value, nullptr, counts, nullptr, earlier);
+                         nullptr, value, nullptr, counts, nullptr, nullptr, earlier);
         };
         if (pilot_rounds <= 0 || pilot_rounds >= spp) {
             for (int p = 0; p < points; ++p)
