@@ -166,3 +166,32 @@ TEST_CASE("allocation: a later call continues every technique's sequence", "[mis
         shader.shade(5, 4, 4, p, nullptr, second, nullptr, two, nullptr, nullptr, &gap),
         Catch::Contains("earlier"));
 }
+
+TEST_CASE("allocation: a noise-target bake (several streams) stays unbiased", "[bake][mis]") {
+    // Under a noise target a point's rounds go to several streams whose
+    // tallies measure the error; allocated passes deal their own rounds to
+    // them. The image's mean error must stay within 4 of its standard errors
+    // (optimal-progressive is unbiased), and the bake must end on its target.
+    Scene scene;
+    floor_scene(scene);
+    const UvCoverage cov = rasterize_uv(scene.geometry().mesh(0), 32, 32);
+    BakeSettings s = allocated_settings(Strategy::OptimalProgressive);
+    s.samples = 0;
+    s.lighting.rounds = 1 << 12;
+    s.noise_target = 0.02;
+    s.lighting.streams = 4;
+    const BakeResult r = bake(scene, s);
+    INFO(r.stats.allocation);
+    CHECK(r.stats.status == BakeStatus::NoiseTarget);
+    CHECK(r.stats.allocated_shares.size() == 3);
+    double sum_err = 0, sum_var = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < cov.triangle.size(); ++i) {
+        if (!cov.is_covered(i)) continue;
+        const double sd = r.noise[i] * r.value[3 * i + 1];
+        sum_err += r.value[3 * i + 1] - lambert_footprint(scene, cov, i);
+        sum_var += sd * sd;
+        ++n;
+    }
+    CHECK(std::abs(sum_err / n) <= 4 * std::sqrt(sum_var) / n);
+}
