@@ -44,7 +44,9 @@ struct BakeSettings {
     // passes among the techniques to minimise the optimal estimator's
     // variance per unit time (mis/allocation.h), every technique keeping a
     // floor share. Needs two passes or more: a bake of a sample budget then
-    // takes a quarter of its rounds as the pilot.
+    // takes a quarter of its rounds as the pilot. Off by default: it wins at
+    // equal samples in most hard cases but not at equal time (the choice and
+    // the costlier draws it favours; bench/results/hard_cases_allocation_gain.txt).
     bool allocate_samples = false;
 };
 
