@@ -16,6 +16,7 @@
 #include <unordered_map>
 
 #include "math/random.h"
+#include "mis/allocation.h"
 #include "mis/estimator.h"
 #include "sampling/ellipse.h"
 #include "sampling/sequence.h"
@@ -75,7 +76,8 @@ struct PointLighting::Impl {
 
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, const int* counts, double* value, double* variance,
-               double* own_variance, StreamEstimates* streams);
+               double* own_variance, StreamEstimates* streams,
+               const std::vector<DrawnRounds>* earlier);
 
     // The per-sample loop's pieces (shade): which techniques take part, delta
     // lights at one position, one sample into its estimators.
@@ -104,6 +106,21 @@ struct PointLighting::Impl {
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
                      const Estimators* into, int n_into, const TableDraw& drawn);
+    // Sample allocation (issue 10): where each technique's draws of a call
+    // start in each stream's sequence — after those of the earlier calls,
+    // whose counts may differ from the settings' — and the pilot recording.
+    void set_draw_starts(int first_round, const std::vector<DrawnRounds>* earlier);
+    std::uint32_t draw_start(int k, int s) const {
+        return draw_start_[std::size_t(k) * std::size_t(p_.settings.streams) + std::size_t(s)];
+    }
+    // Rounds of stream s (of K) among rounds [0, end_round).
+    static int rounds_in_stream(int s, int end_round, int K) {
+        return end_round > s ? (end_round - s + K - 1) / K : 0;
+    }
+    void record_sample(const Active& active, std::size_t a, const double* pdfs, const Vec3& f,
+                       std::uint64_t rays_before);
+    std::vector<std::uint32_t> draw_start_;
+    AllocationPilot* pilot_ = nullptr;
     class LightStreams;
     // shade's pieces: how its rounds fall into the streams, the estimators
     // they go to, the delta lights' sums, and the point's estimate from them.
@@ -548,7 +565,14 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
                                              std::uint64_t key, const std::vector<int>& active,
                                              const int* counts, bool fresh) {
     auto it = cache.find(key);
-    if (it != cache.end() && fresh) {
+    // Counts other than the settings' (a final partial pass, an allocated
+    // tile's): kept while the next point asks for the same.
+    auto same_counts = [&](const MisEstimator& e) {
+        for (std::size_t a = 0; a < active.size(); ++a)
+            if (e.counts()[a] != counts[active[a]]) return false;
+        return true;
+    };
+    if (it != cache.end() && fresh && !same_counts(it->second)) {
         cache.erase(it);
         it = cache.end();
     }
@@ -765,13 +789,16 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         ok = pdfs[a] > 0;
     }
     if (!ok) {
+        if (pilot_) pilot_->add_work(k, 1.0);
         for (int e = 0; e < n_into; ++e) {
             into[e].main->add_null_sample(int(a));
             if (hidden_index >= 0) into[e].hidden->add_null_sample(hidden_index);
         }
         return;
     }
+    const std::uint64_t rays_before = counters.rays;
     const Integrand f = integrand(p.x, p.n, p.ng, w);
+    if (pilot_) record_sample(active, a, pdfs, f.main + f.hidden, rays_before);
     const double main_f[3] = {f.main.x, f.main.y, f.main.z};
     const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
     std::size_t h = 0;
@@ -782,6 +809,48 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         into[e].main->add_sample(int(a), pdfs, main_f);
         if (hidden_index >= 0) into[e].hidden->add_sample(hidden_index, hidden_pdfs, hidden_f);
     }
+}
+
+// One sample for the allocation pilot, over the settings' techniques (those
+// not active here have density 0 at it). Its work: one unit for the draw, the
+// densities and the integrand, and one per ray traced — a shadow ray costs
+// about as much as the rest of a sample, and rays are what the techniques'
+// samples differ in (a BSDF direction that meets no light traces none).
+void PointLighting::Impl::record_sample(const Active& active, std::size_t a, const double* pdfs,
+                                        const Vec3& f, std::uint64_t rays_before) {
+    double all[kMaxMisTechniques] = {};
+    for (std::size_t b = 0; b < active.all.size(); ++b) all[active.all[b]] = pdfs[b];
+    const double y = luminance(f);
+    pilot_->add_sample(all, &y);
+    pilot_->add_work(active.all[a], 1.0 + double(counters.rays - rays_before));
+}
+
+void PointLighting::Impl::set_draw_starts(int first_round,
+                                          const std::vector<DrawnRounds>* earlier) {
+    const int K = p_.settings.streams;
+    const std::vector<int>& samples = p_.settings.samples;
+    draw_start_.assign(samples.size() * K, 0);
+    if (!earlier) {
+        for (std::size_t k = 0; k < samples.size(); ++k)
+            for (int s = 0; s < K; ++s)
+                draw_start_[k * K + s] = std::uint32_t(rounds_in_stream(s, first_round, K) * samples[k]);
+        return;
+    }
+    int next = 0;
+    for (const DrawnRounds& d : *earlier) {
+        if (d.first_round != next || d.rounds < 0)
+            throw std::invalid_argument("earlier: calls must follow each other from round 0");
+        const int* counts = d.counts ? d.counts : samples.data();
+        for (std::size_t k = 0; k < samples.size(); ++k)
+            for (int s = 0; s < K; ++s)
+                draw_start_[k * K + s] += std::uint32_t(
+                    counts[k] * (rounds_in_stream(s, d.first_round + d.rounds, K) -
+                                 rounds_in_stream(s, d.first_round, K)));
+        next += d.rounds;
+    }
+    if (next != first_round)
+        throw std::invalid_argument("earlier: rounds add up to " + std::to_string(next) +
+                                    ", not first_round " + std::to_string(first_round));
 }
 
 Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
@@ -884,7 +953,7 @@ double PointLighting::Impl::whole_alpha_inflation() const {
 // rays, one table lookup each).
 class PointLighting::Impl::LightStreams {
 public:
-    LightStreams(Impl& impl, std::uint64_t base, const Active& active, int first_round)
+    LightStreams(Impl& impl, std::uint64_t base, const Active& active)
         : impl_(impl), base_(base), lights_(impl.p_.integrated.size()),
           streams_(impl.p_.settings.streams) {
         const auto& techniques = impl.p_.settings.techniques;
@@ -896,11 +965,9 @@ public:
         taken_.assign(techniques.size() * std::size_t(streams_) * lights_, 0);
         for (int k : active.lights) {
             if (!uses_table(k)) continue;
-            const int per_round = impl.p_.settings.samples[k];
             for (int s = 0; s < streams_; ++s) {
-                const int earlier = first_round > s ? (first_round - s + streams_ - 1) / streams_ : 0;
                 const ScrambledSobol seq = technique_sequence(k, s);
-                for (std::uint32_t i = 0; i < std::uint32_t(earlier * per_round); ++i)
+                for (std::uint32_t i = 0; i < impl.draw_start(k, s); ++i)
                     ++count(k, s, slot(k, seq, i));
             }
         }
@@ -1068,7 +1135,8 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
-                                double* own_variance_out, StreamEstimates* streams) {
+                                double* own_variance_out, StreamEstimates* streams,
+                                const std::vector<DrawnRounds>* earlier) {
     const int* counts = counts_in ? counts_in : p_.settings.samples.data();
     ++point_serial_;  // invalidates the per-point solid-angle cache
     Active active;
@@ -1083,7 +1151,8 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     auto sequence = [&](std::size_t k, int s) {
         return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
     };
-    LightStreams light_streams(*this, base, active, first_round);
+    set_draw_starts(first_round, earlier);
+    LightStreams light_streams(*this, base, active);
     const std::size_t delta_group = p_.settings.techniques.size();
     const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
@@ -1117,7 +1186,10 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             const bool table = light_streams.uses_table(k);
             for (int j = 0; j < counts[k]; ++j) {
                 const std::uint32_t index =
-                    round_in_stream * std::uint32_t(p_.settings.samples[k]) + j;
+                    draw_start(k, s) +
+                    (round_in_stream - std::uint32_t(rounds_in_stream(s, first_round, K))) *
+                        std::uint32_t(counts[k]) +
+                    std::uint32_t(j);
                 take_sample(active, a, seq, index, centre, footprint, into,
                             by_stream_only ? 2 : 1,
                             table ? light_streams.draw(k, s, seq, index) : TableDraw{});
@@ -1223,16 +1295,23 @@ PointLighting::PointLighting(PointLighting&& other) noexcept
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
                           const SurfacePoint& centre, const Footprint* footprint,
                           double value[3], double variance[3], const int* counts,
-                          double own_variance[3], StreamEstimates* streams) {
+                          double own_variance[3], StreamEstimates* streams,
+                          const std::vector<DrawnRounds>* earlier) {
     impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
-                 own_variance, streams);
+                 own_variance, streams, earlier);
+}
+
+void PointLighting::record_into(AllocationPilot* pilot) {
+    if (pilot && pilot->num_techniques() != int(impl_->p_.settings.techniques.size()))
+        throw std::invalid_argument("pilot: expected one technique per settings technique");
+    impl_->pilot_ = pilot;
 }
 
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
                           const Vec3& n, const Vec3& ng, double value[3],
                           double variance[3]) {
     impl_->shade(stream, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
-                 variance, nullptr, nullptr);
+                 variance, nullptr, nullptr, nullptr);
 }
 
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,

@@ -20,6 +20,8 @@
 
 namespace omis {
 
+class AllocationPilot;
+
 struct DirectLightingSettings {
     std::vector<Technique> techniques;
     std::vector<int> samples;  // per technique, per round
@@ -139,6 +141,14 @@ struct StreamEstimates {
     double luminance[kMaxSampleStreams] = {};
 };
 
+// Rounds a point drew earlier with other counts than the settings' (sample
+// allocation between passes, issue 10): a later call continues every
+// technique's sequences after the draws these took.
+struct DrawnRounds {
+    int first_round = 0, rounds = 0;
+    const int* counts = nullptr;  // per technique and round; null: the settings'
+};
+
 // Shades one point at a time; one per thread, as it keeps scratch memory.
 class PointLighting {
 public:
@@ -170,13 +180,23 @@ public:
     // two over neighbouring points. variance may be null (then the streams
     // are not compared, which saves their estimators). streams, if given,
     // receives each stream's estimate of these rounds.
+    // earlier: every call before this one for the same point, in order, when
+    // their counts were not all the settings' (their rounds must add up to
+    // first_round; std::invalid_argument otherwise).
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
                const int* counts = nullptr, double own_variance[3] = nullptr,
-               StreamEstimates* streams = nullptr);
+               StreamEstimates* streams = nullptr,
+               const std::vector<DrawnRounds>* earlier = nullptr);
     // A fixed point x with shading normal n and geometric normal ng.
     void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
+
+    // While set, every sample of the points shaded goes to `pilot` too (its
+    // techniques are the settings', its integrand the luminance of f) with
+    // its work (1 + the rays it traced); the caller ends each point
+    // (AllocationPilot::end_point). Null stops recording.
+    void record_into(AllocationPilot* pilot);
 
     LightingCounters counters;
 
