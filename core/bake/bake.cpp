@@ -250,9 +250,11 @@ struct Shaded {
 // the passes and what they leave in the result.
 //
 // Passes: all rounds at once unless a time or noise budget wants to look
-// between passes; then passes double in size (rounds_per_pass, twice that,
-// ...), so budgets are checked often early on and the per-pass cost (one
-// solve per point) stays small later. Every pass reaches every point: a
+// between passes. Under a noise target passes grow (rounds_per_pass, 1.5×
+// that, ...), so the target is checked often early on and the per-pass cost
+// (one solve per point) stays small later. Under a time budget alone there
+// are about three: one round (measures the cost), half the time left, the
+// rest (plan_pass). Every pass reaches every point: a
 // time budget ends on whole passes (the first always completes; the last
 // takes the time the measured cost says is left: plan_pass), so all points
 // end with the same count. Each point's draws continue one low-discrepancy sequence
@@ -301,6 +303,7 @@ private:
 
     // The pass schedule.
     int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
+    int later_min_rounds_ = 1;  // the smallest pass after the first
     bool last_done_ = true;
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
@@ -340,14 +343,16 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     context_.keep_going = [this] { return keep_going(); };
 
     // Under a time budget the first pass — the part a budget cannot cut — is
-    // a single round, so small budgets are not eaten by it.
-    // (Optimal strategies solve per pass, and a one-round solve is poor:
-    // they keep rounds_per_pass.)
-    const bool single_first =
-        settings_.time_budget > 0 && !is_optimal(settings_.lighting.strategy);
+    // a single round, so small budgets are not eaten by it; it also measures
+    // what a round costs here. The optimal strategies solve per pass (a
+    // one-round pass falls back to balance, too few samples to fit α), so
+    // their later passes take rounds_per_pass or more.
+    const bool under_time = settings_.time_budget > 0;
     next_rounds_ = !progressive_ ? budget_.full_rounds
-                   : single_first ? 1
-                                  : settings_.rounds_per_pass;
+                   : under_time  ? 1
+                                 : settings_.rounds_per_pass;
+    later_min_rounds_ =
+        under_time && is_optimal(settings_.lighting.strategy) ? settings_.rounds_per_pass : 1;
     last_done_ = budget_.last.empty();
 }
 
@@ -470,14 +475,20 @@ bool Baker::plan_pass(Pass& pass) {
     if (settings_.time_budget > 0 && pass_count_ > 0) {
         const double fits = timer_.fit(settings_.time_budget - elapsed());
         const double fit_rounds = fits / budget_.per_round;
+        const int rounds_left = budget_.full_rounds - done_rounds_;
         // When the time left would cut the pass after this one short (less
-        // than 3× this pass fits), this pass takes all of it and is the last:
-        // a small final pass adds few samples, and as its estimate joins the
-        // others' as an independent one, its poor error raises the estimate.
-        if (!pass.counts && fit_rounds < 3.0 * pass.rounds &&
-            fit_rounds < budget_.full_rounds - done_rounds_) {
+        // than this pass fits again), this pass takes all of it and is the
+        // last: a small final pass adds few samples, and as its estimate joins
+        // the others' as an independent one, its poor error raises the estimate.
+        if (!pass.counts && fit_rounds < 2.0 * pass.rounds && fit_rounds < rounds_left) {
             pass.rounds = int(std::max(0.0, fit_rounds));
             time_ends_ = true;
+        } else if (!pass.counts && settings_.noise_target <= 0) {
+            // Few passes: each costs a fixed part (per-point set-up, the
+            // optimal strategies' solve). After the first (one round, which
+            // measures the cost) a pass takes half the time left, as the
+            // passes so far predict, and the next one the rest.
+            pass.rounds = std::min(rounds_left, std::max(pass.rounds, int(0.5 * fit_rounds)));
         }
         if (pass.rounds < 1 || (pass.counts && fits < budget_.last_samples)) {
             status_ = BakeStatus::TimeBudget;
@@ -516,7 +527,8 @@ void Baker::run_passes() {
         // grow by half only, so a texel overshoots its target by at most
         // √1.5 ≈ 1.22 in error.
         const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
-        next_rounds_ = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
+        next_rounds_ = int(std::min<double>(
+            1 << 24, std::max<double>(later_min_rounds_, std::ceil(growth * pass.rounds))));
         if (noise_target_met()) {
             status_ = BakeStatus::NoiseTarget;
             return;
