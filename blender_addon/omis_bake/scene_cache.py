@@ -4,15 +4,16 @@ Every bake exports the Blender scene again (export.py: cheap, numpy reads), but
 committing it (the BVH over every triangle, the emitter shapes, the light
 tree) costs as much as a small bake's sampling. An omis scene is a function of
 the calls that built it and nothing else, so ``RecordingScene`` forwards every
-building call to a new omis.Scene and digests the call with all its arguments
-(array bytes, dtype and shape; exact float reprs); ``committed()`` returns the
-previous bake's committed scene when the digests match, else commits the new
-one and keeps it. The reuse is exact whatever changed in Blender — a light, a
-mesh, a modifier, a material, a world: a change either changes a call or never
-reaches omis. One scene is kept (the last one baked).
+building call to a new omis.Scene and records it with its arguments;
+``committed()`` returns the previous bake's committed scene when every call
+and argument is the same, bit for bit (arrays: dtype, shape and bytes;
+numbers: type and repr), else commits the new one and keeps it. The reuse is
+exact whatever changed in Blender — a light, a mesh, a modifier, a material,
+a world: a change either changes a call or never reaches omis. One scene is
+kept (the last one baked), with its calls (the exported arrays, a fraction of
+what the omis scene holds).
 """
 
-import hashlib
 import threading
 
 import numpy as np
@@ -24,26 +25,25 @@ _BUILDERS = frozenset({
 })
 
 _lock = threading.Lock()
-_last = {"digest": None, "scene": None}
+_last = {"calls": None, "scene": None}
 
 
-def _feed(h, value):
-    """Digests a call argument exactly: type, then content."""
-    if isinstance(value, np.ndarray):
-        a = np.ascontiguousarray(value)
-        h.update(f"a{a.dtype.str}{a.shape}".encode())
-        h.update(a.tobytes())
-    elif isinstance(value, (list, tuple)):
-        h.update(f"s{len(value)}(".encode())
-        for item in value:
-            _feed(h, item)
-        h.update(b")")
-    elif isinstance(value, np.generic):
-        _feed(h, value.item())
-    elif isinstance(value, (bool, int, float, str)) or value is None:
-        h.update(f"{type(value).__name__}:{value!r};".encode())
-    else:
-        raise TypeError(f"scene_cache: cannot digest a {type(value).__name__} argument")
+def _as_bytes(a):
+    return np.ascontiguousarray(a).reshape(-1).view(np.uint8)
+
+
+def same(a, b):
+    """True when two call arguments are identical bit for bit (-0.0 is not 0.0)."""
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)
+                and a.dtype == b.dtype and a.shape == b.shape
+                and np.array_equal(_as_bytes(a), _as_bytes(b)))
+    if isinstance(a, dict):  # keyword arguments
+        return isinstance(b, dict) and same(sorted(a.items()), sorted(b.items()))
+    if isinstance(a, (list, tuple)):
+        return (type(a) is type(b) and len(a) == len(b)
+                and all(same(x, y) for x, y in zip(a, b)))
+    return type(a) is type(b) and repr(a) == repr(b)
 
 
 class RecordingScene:
@@ -51,7 +51,7 @@ class RecordingScene:
 
     def __init__(self, omis):
         self._scene = omis.Scene()
-        self._hash = hashlib.blake2b(digest_size=20)
+        self.calls = []      # (method name, args, kwargs), in order
         self.reused = None   # after committed(): True when the last bake's scene was reused
 
     def __getattr__(self, name):
@@ -60,26 +60,20 @@ class RecordingScene:
             return method
 
         def record(*args, **kwargs):
-            _feed(self._hash, name)
-            _feed(self._hash, args)
-            _feed(self._hash, sorted(kwargs.items()))
+            self.calls.append((name, args, kwargs))
             return method(*args, **kwargs)
         return record
-
-    def digest(self):
-        return self._hash.hexdigest()
 
     def committed(self):
         """The committed omis.Scene these calls build: the last bake's when it had the same
         calls, else this one, committed (and kept for the next bake)."""
-        digest = self.digest()
         with _lock:
-            if _last["digest"] == digest and _last["scene"] is not None:
+            if _last["scene"] is not None and same(_last["calls"], self.calls):
                 self.reused = True
                 return _last["scene"]
         self._scene.commit()
         with _lock:
-            _last["digest"], _last["scene"] = digest, self._scene
+            _last["calls"], _last["scene"] = self.calls, self._scene
         self.reused = False
         return self._scene
 
@@ -87,4 +81,4 @@ class RecordingScene:
 def clear():
     """Forgets the kept scene (frees its memory; the next bake commits anew)."""
     with _lock:
-        _last["digest"], _last["scene"] = None, None
+        _last["calls"], _last["scene"] = None, None
