@@ -277,6 +277,7 @@ private:
     void run_passes();
     bool noise_target_met() const;
     void record_pass(double sampling_start);
+    void forget_probe();
     void write_outputs();
     void fill_margin();
     void fill_stats();
@@ -304,6 +305,9 @@ private:
     // The pass schedule.
     int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
     int later_min_rounds_ = 1;  // the smallest pass after the first
+    bool probe_ = false;           // the first pass is a probe the next one replaces
+    bool replace_probe_ = false;   // ... and it ran
+    std::uint64_t replaced_samples_ = 0;  // the probe's, when replaced
     bool last_done_ = true;
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
@@ -344,15 +348,19 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
 
     // Under a time budget the first pass — the part a budget cannot cut — is
     // a single round, so small budgets are not eaten by it; it also measures
-    // what a round costs here. The optimal strategies solve per pass (a
-    // one-round pass falls back to balance, too few samples to fit α), so
-    // their later passes take rounds_per_pass or more.
+    // what a round costs here. The optimal strategies solve per pass, and a
+    // one-round pass falls back to balance (too few samples to fit α): its
+    // estimate, averaged in by samples, would add balance's far larger
+    // variance per sample. For them it is a probe: the result if the budget
+    // ends there, else replaced by the passes after it, which start again at
+    // round 0 (the same draws) and take rounds_per_pass or more.
     const bool under_time = settings_.time_budget > 0;
+    const bool optimal = is_optimal(settings_.lighting.strategy);
     next_rounds_ = !progressive_ ? budget_.full_rounds
                    : under_time  ? 1
                                  : settings_.rounds_per_pass;
-    later_min_rounds_ =
-        under_time && is_optimal(settings_.lighting.strategy) ? settings_.rounds_per_pass : 1;
+    later_min_rounds_ = under_time && optimal ? settings_.rounds_per_pass : 1;
+    probe_ = under_time && optimal && budget_.full_rounds > 1;
     last_done_ = budget_.last.empty();
 }
 
@@ -512,6 +520,7 @@ void Baker::run_passes() {
     for (;;) {
         Pass pass;
         if (!plan_pass(pass)) return;
+        if (replace_probe_) forget_probe();
         const double pass_start = elapsed();
         run_pass(pass);
         timer_.add(pass.samples, elapsed() - pass_start);
@@ -522,7 +531,11 @@ void Baker::run_passes() {
         }
         record_pass(sampling_start);
         if (pass.counts) last_done_ = true;
-        done_rounds_ += pass.rounds;
+        if (probe_ && pass_count_ == 1) {
+            replace_probe_ = true;  // the next pass, if any, starts again at round 0
+        } else {
+            done_rounds_ += pass.rounds;
+        }
         // Doubling keeps the per-pass cost small; under a noise target passes
         // grow by half only, so a texel overshoots its target by at most
         // √1.5 ≈ 1.22 in error.
@@ -533,6 +546,18 @@ void Baker::run_passes() {
             status_ = BakeStatus::NoiseTarget;
             return;
         }
+    }
+}
+
+// The probe pass's estimates leave the running means (the next pass's
+// weight then replaces them) and its samples the count.
+void Baker::forget_probe() {
+    replace_probe_ = false;
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) continue;
+        replaced_samples_ += state_[i].weight;
+        state_[i] = PointState{};
+        for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = 0.f;
     }
 }
 
@@ -603,6 +628,7 @@ void Baker::fill_stats() {
         stats.rays_traced += s.counters.rays;
         stats.mis_systems += s.counters.systems;
     }
+    stats.samples -= std::min(stats.samples, replaced_samples_);  // counts what the values hold
     stats.status = status_;
     stats.passes = pass_count_;
     stats.texels = layout_.count;

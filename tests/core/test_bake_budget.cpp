@@ -58,6 +58,39 @@ TEST_CASE("a time budget's first pass is one round, whatever the strategy", "[ba
     }
 }
 
+TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes exactly N",
+          "[bake]") {
+    Scene scene;
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    floor_scene(scene, positions, triangles, uvs);
+    for (long long n : {5LL, 12LL, 40LL}) {  // one round; two and a final 2; eight rounds
+        BakeSettings s;
+        s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
+                                 *parse_technique("uniform/area")};
+        s.lighting.samples = {2, 3};
+        s.lighting.strategy = Strategy::OptimalDirect;
+        s.samples = n;
+        s.time_budget = 1000;  // passes (a probe first), never reached
+        s.width = s.height = 16;
+        const BakeResult r = bake(scene, s);
+        INFO("samples " << n);
+        CHECK(r.stats.status == BakeStatus::Complete);
+        CHECK(r.stats.passes >= (n > 5 ? 2 : 1));
+        CHECK(r.stats.samples == std::uint64_t(n) * r.stats.covered);
+        for (std::size_t i = 0; i < r.samples.size(); ++i)
+            if (r.mask[i] > 0) CHECK(r.samples[i] == std::uint32_t(n));
+        if (n == 40) {
+            // The pass that replaces the probe draws rounds 0–7 again, all of
+            // them (the budget is far off): the values of a bake in one pass.
+            BakeSettings whole = s;
+            whole.time_budget = 0;
+            CHECK(r.stats.passes == 2);
+            CHECK(r.value == bake(scene, whole).value);
+        }
+    }
+}
+
 TEST_CASE("a scene builds each light selector once, as LightSelector would", "[bake]") {
     Scene lit;  // 40 triangle lights, every other one two-sided
     std::vector<std::uint32_t> integrated;
