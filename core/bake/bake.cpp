@@ -284,9 +284,9 @@ struct StreamTally {
 // Passes: all rounds at once unless a time or noise budget wants to look
 // between passes. Under a noise target passes grow (rounds_per_pass, 1.5×
 // that, ...), so the target is checked often early on and the per-pass cost
-// (one solve per point) stays small later. Under a time budget alone there
-// are about three: one round (measures the cost), half the time left, the
-// rest (plan_pass). Every pass reaches every point: a
+// (one solve per point) stays small later. Under a time budget alone: one
+// round (measures the cost), then each pass half the time left but at most
+// 4× the one before, the last the rest (plan_pass). Every pass reaches every point: a
 // time budget ends on whole passes (the first always completes; the last
 // takes the time the measured cost says is left: plan_pass), so all points
 // end with the same count. Each point's draws continue one low-discrepancy sequence
@@ -339,6 +339,7 @@ private:
     // The pass schedule.
     int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
     int later_min_rounds_ = 1;  // the smallest pass after the first
+    int last_pass_rounds_ = 1;  // of the pass that ran last
     bool probe_ = false;           // the first pass is a probe the next one replaces
     bool replace_probe_ = false;   // ... and it ran
     std::uint64_t replaced_samples_ = 0;  // the probe's, when replaced
@@ -543,12 +544,19 @@ bool Baker::plan_pass(Pass& pass) {
         if (!pass.counts && fit_rounds < 2.0 * pass.rounds && fit_rounds < rounds_left) {
             pass.rounds = int(std::max(0.0, fit_rounds));
             time_ends_ = true;
+            // An optimal strategy skips a last pass far smaller than the one
+            // before: its own solve (balance, below 2(k + 1) samples) joins
+            // the others' and raises the error more than its samples lower it.
+            if (is_optimal(settings_.lighting.strategy) && 4 * pass.rounds < last_pass_rounds_)
+                pass.rounds = 0;
         } else if (!pass.counts && settings_.noise_target <= 0) {
             // Few passes: each costs a fixed part (per-point set-up, the
-            // optimal strategies' solve). After the first (one round, which
-            // measures the cost) a pass takes half the time left, as the
-            // passes so far predict, and the next one the rest.
-            pass.rounds = std::min(rounds_left, std::max(pass.rounds, int(0.5 * fit_rounds)));
+            // optimal strategies' solve). A pass takes half the time left, as
+            // the passes so far predict, but at most 4× the pass before it,
+            // whose time predicts its own: one round (milliseconds) measures
+            // the cost too roughly to size a pass of seconds.
+            pass.rounds = std::min({rounds_left, std::max(pass.rounds, int(0.5 * fit_rounds)),
+                                    4 * last_pass_rounds_});
         }
         if (pass.rounds < 1 || (pass.counts && fits < budget_.last_samples)) {
             status_ = BakeStatus::TimeBudget;
@@ -583,6 +591,7 @@ void Baker::run_passes() {
         }
         record_pass(sampling_start);
         if (pass.counts) last_done_ = true;
+        if (!pass.counts) last_pass_rounds_ = pass.rounds;
         if (probe_ && pass_count_ == 1) {
             replace_probe_ = true;  // the next pass, if any, starts again at round 0
         } else {
