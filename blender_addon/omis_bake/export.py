@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import BakeError
+from .scene_cache import RecordingScene
 
 # Object types Cycles turns into triangles (occluders / emitters).
 _GEOMETRY_TYPES = {'MESH', 'CURVE', 'SURFACE', 'FONT', 'META'}
@@ -66,7 +67,7 @@ class AttributeTarget:
 
 @dataclass
 class Export:
-    scene: object                  # omis.Scene, not yet committed
+    scene: object                  # scene_cache.RecordingScene (an omis.Scene being built)
     images: list                   # ImageTarget
     attributes: list               # AttributeTarget
     warnings: list
@@ -409,7 +410,8 @@ class _Exporter:
         self.omis = omis
         self.units = units
         self.target = target
-        self.scene = omis.Scene()
+        # Records its calls so that an unchanged scene is committed once (scene_cache.py).
+        self.scene = RecordingScene(omis)
         self.warnings = []
         self.lights = []
         self.counts = {"instances": 0, "meshes": 0, "triangles": 0, "vertices": 0,

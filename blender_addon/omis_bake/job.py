@@ -42,6 +42,8 @@ class _Unit:
 
 class BakeJob:
     def __init__(self, context, objects, settings):
+        # A time limit is the bake's whole wall time: export and commit count.
+        self.created = time.perf_counter()
         try:
             omis = native.require()
         except RuntimeError as exc:
@@ -78,6 +80,7 @@ class BakeJob:
         self.error = None
         self.seconds = 0.0
         self.thread = None
+        self.scene_reused = False  # run() baked the last bake's committed omis scene
 
     # -- control (any thread) --
 
@@ -96,7 +99,8 @@ class BakeJob:
         elapsed = time.perf_counter() - self.started
         left = elapsed * (1.0 - self.fraction) / self.fraction
         if self.settings.time_budget > 0:
-            left = min(left, max(0.0, self.settings.time_budget - elapsed))
+            since_created = time.perf_counter() - self.created
+            left = min(left, max(0.0, self.settings.time_budget - since_created))
         return left
 
     def _progress(self, fraction):
@@ -118,7 +122,8 @@ class BakeJob:
         s = self.settings
         omis = self.omis
         try:
-            self.export.scene.commit()
+            scene = self.export.scene.committed()   # the last bake's, when unchanged
+            self.scene_reused = self.export.scene.reused
             common = dict(strategy=s.strategy, beta=float(s.power_beta),
                           cutoff=float(s.cutoff_threshold), samples=int(s.samples),
                           seed=int(s.seed), smooth_normals=True,
@@ -136,15 +141,15 @@ class BakeJob:
                 self.current_label = unit.label
                 budget = None
                 if s.time_budget > 0:
-                    left = s.time_budget - (time.perf_counter() - start)
+                    left = s.time_budget - (time.perf_counter() - self.created)
                     budget = max(left * unit.weight / remaining_weight, 1e-3)
                 if unit.kind == 'uv':
-                    result = omis.bake_uv(self.export.scene, unit.part.mesh_id,
+                    result = omis.bake_uv(scene, unit.part.mesh_id,
                                           unit.target.width, unit.target.height,
                                           margin=int(s.margin), margin_type=margin_type,
                                           time_budget=budget, **common)
                 else:
-                    result = omis.bake_vertices(self.export.scene, unit.part.mesh_id,
+                    result = omis.bake_vertices(scene, unit.part.mesh_id,
                                                 domain="CORNER", time_budget=budget, **common)
                 unit.value = np.array(result.value, np.float32)
                 unit.mask = np.array(result.mask, np.float32)

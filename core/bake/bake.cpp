@@ -309,9 +309,11 @@ struct StreamTally {
 // the passes and what they leave in the result.
 //
 // Passes: all rounds at once unless a time or noise budget wants to look
-// between passes; then passes double in size (rounds_per_pass, twice that,
-// ...), so budgets are checked often early on and the per-pass cost (one
-// solve per point) stays small later. Every pass reaches every point: a
+// between passes. Under a noise target passes grow (rounds_per_pass, 1.5×
+// that, ...), so the target is checked often early on and the per-pass cost
+// (one solve per point) stays small later. Under a time budget alone: one
+// round (measures the cost), then each pass half the time left but at most
+// 4× the one before, the last the rest (plan_pass). Every pass reaches every point: a
 // time budget ends on whole passes (the first always completes; the last
 // takes the time the measured cost says is left: plan_pass), so all points
 // end with the same count. Each point's draws continue one low-discrepancy sequence
@@ -341,6 +343,7 @@ private:
     void run_passes();
     bool noise_target_met() const;
     void record_pass(double sampling_start);
+    void forget_probe();
     void write_outputs();
     void fill_margin();
     void fill_stats();
@@ -369,6 +372,11 @@ private:
 
     // The pass schedule.
     int pass_count_ = 0, done_rounds_ = 0, next_rounds_ = 0;
+    int later_min_rounds_ = 1;  // the smallest pass after the first
+    int last_pass_rounds_ = 1;  // of the pass that ran last
+    bool probe_ = false;           // the first pass is a probe the next one replaces
+    bool replace_probe_ = false;   // ... and it ran
+    std::uint64_t replaced_samples_ = 0;  // the probe's, when replaced
     bool last_done_ = true;
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
@@ -416,18 +424,25 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     context_.keep_going = [this] { return keep_going(); };
 
     // Under a time budget the first pass — the part a budget cannot cut — is
-    // a single round, so small budgets are not eaten by it.
-    // (Optimal strategies solve per pass, and a one-round solve is poor:
-    // they keep rounds_per_pass.)
-    const bool single_first =
-        settings_.time_budget > 0 && !is_optimal(settings_.lighting.strategy);
+    // a single round, so small budgets are not eaten by it; it also measures
+    // what a round costs here. The optimal strategies solve per pass, and a
+    // one-round pass falls back to balance (too few samples to fit α): its
+    // estimate, averaged in by samples, would add balance's far larger
+    // variance per sample. For them it is a probe: the result if the budget
+    // ends there, else replaced by the passes after it, which start again at
+    // round 0 (the same draws) and take rounds_per_pass or more.
+    const bool under_time = settings_.time_budget > 0;
+    const bool optimal = is_optimal(settings_.lighting.strategy);
     next_rounds_ = !progressive_ ? budget_.full_rounds
-                   : single_first ? 1
-                                  : settings_.rounds_per_pass;
+                   : under_time  ? 1
+                                 : settings_.rounds_per_pass;
+    later_min_rounds_ = under_time && optimal ? settings_.rounds_per_pass : 1;
+    probe_ = under_time && optimal && budget_.full_rounds > 1;
     last_done_ = budget_.last.empty();
     allocate_ = settings_.allocate_samples && is_optimal(settings_.lighting.strategy) &&
                 context_.techniques.size() >= 2 && budget_.full_rounds >= 2;
     if (allocate_) {
+        probe_ = false;  // the first pass is the allocation's pilot, not replaced
         tiles_.resize(layout_.tiles);
         // A bake of a sample budget: a quarter of it is the pilot, the rest one pass.
         if (!progressive_) next_rounds_ = std::max(1, budget_.full_rounds / 4);
@@ -677,14 +692,27 @@ bool Baker::plan_pass(Pass& pass) {
     if (settings_.time_budget > 0 && pass_count_ > 0) {
         const double fits = timer_.fit(settings_.time_budget - elapsed());
         const double fit_rounds = fits / budget_.per_round;
+        const int rounds_left = budget_.full_rounds - done_rounds_;
         // When the time left would cut the pass after this one short (less
-        // than 3× this pass fits), this pass takes all of it and is the last:
-        // a small final pass adds few samples, and as its estimate joins the
-        // others' as an independent one, its poor error raises the estimate.
-        if (!pass.counts && fit_rounds < 3.0 * pass.rounds &&
-            fit_rounds < budget_.full_rounds - done_rounds_) {
+        // than this pass fits again), this pass takes all of it and is the
+        // last: a small final pass adds few samples, and as its estimate joins
+        // the others' as an independent one, its poor error raises the estimate.
+        if (!pass.counts && fit_rounds < 2.0 * pass.rounds && fit_rounds < rounds_left) {
             pass.rounds = int(std::max(0.0, fit_rounds));
             time_ends_ = true;
+            // An optimal strategy skips a last pass far smaller than the one
+            // before: its own solve (balance, below 2(k + 1) samples) joins
+            // the others' and raises the error more than its samples lower it.
+            if (is_optimal(settings_.lighting.strategy) && 4 * pass.rounds < last_pass_rounds_)
+                pass.rounds = 0;
+        } else if (!pass.counts && settings_.noise_target <= 0) {
+            // Few passes: each costs a fixed part (per-point set-up, the
+            // optimal strategies' solve). A pass takes half the time left, as
+            // the passes so far predict, but at most 4× the pass before it,
+            // whose time predicts its own: one round (milliseconds) measures
+            // the cost too roughly to size a pass of seconds.
+            pass.rounds = std::min({rounds_left, std::max(pass.rounds, int(0.5 * fit_rounds)),
+                                    4 * last_pass_rounds_});
         }
         if (pass.rounds < 1 || (pass.counts && fits < budget_.last_samples)) {
             status_ = BakeStatus::TimeBudget;
@@ -708,6 +736,7 @@ void Baker::run_passes() {
     for (;;) {
         Pass pass;
         if (!plan_pass(pass)) return;
+        if (replace_probe_) forget_probe();
         const double pass_start = elapsed();
         run_pass(pass);
         timer_.add(pass.samples, elapsed() - pass_start);
@@ -718,17 +747,36 @@ void Baker::run_passes() {
         }
         record_pass(sampling_start);
         if (pass.counts) last_done_ = true;
-        done_rounds_ += pass.rounds;
+        if (!pass.counts) last_pass_rounds_ = pass.rounds;
+        if (probe_ && pass_count_ == 1) {
+            replace_probe_ = true;  // the next pass, if any, starts again at round 0
+        } else {
+            done_rounds_ += pass.rounds;
+        }
         // Doubling keeps the per-pass cost small; under a noise target passes
         // grow by half only, so a texel overshoots its target by at most
         // √1.5 ≈ 1.22 in error.
         const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
-        next_rounds_ = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
+        next_rounds_ = int(std::min<double>(
+            1 << 24, std::max<double>(later_min_rounds_, std::ceil(growth * pass.rounds))));
         if (!progressive_) next_rounds_ = budget_.full_rounds;  // after an allocation pilot
         if (noise_target_met()) {
             status_ = BakeStatus::NoiseTarget;
             return;
         }
+    }
+}
+
+// The probe pass's estimates leave the running means, the error tallies and
+// the sample count (the next pass's estimates replace them).
+void Baker::forget_probe() {
+    replace_probe_ = false;
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) continue;
+        replaced_samples_ += state_[i].weight;
+        state_[i] = PointState{};
+        if (!tallies_.empty()) tallies_[i] = StreamTally{};
+        for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = 0.f;
     }
 }
 
@@ -799,6 +847,7 @@ void Baker::fill_stats() {
         stats.rays_traced += s.counters.rays;
         stats.mis_systems += s.counters.systems;
     }
+    stats.samples -= std::min(stats.samples, replaced_samples_);  // counts what the values hold
     stats.status = status_;
     stats.passes = pass_count_;
     stats.texels = layout_.count;

@@ -34,8 +34,8 @@ struct BakeSettings {
     double noise_target = 0;    // relative standard error per texel; 0 = none
     // Rounds of the first pass when a noise target asks for progressive
     // passes (later passes grow); under a time budget the first pass is one
-    // round for the heuristics (optimal strategies solve per pass and keep
-    // this many). Each pass is one estimate per
+    // round (the optimal strategies, which solve per pass, go on with this
+    // many or more). Each pass is one estimate per
     // texel (its own solve); passes are averaged, weighted by samples.
     int rounds_per_pass = 4;
     int threads = 0;            // worker threads; 0 = all cores

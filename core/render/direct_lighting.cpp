@@ -954,7 +954,7 @@ double PointLighting::Impl::whole_alpha_inflation() const {
 class PointLighting::Impl::LightStreams {
 public:
     LightStreams(Impl& impl, std::uint64_t base, const Active& active)
-        : impl_(impl), base_(base), lights_(impl.p_.integrated.size()),
+        : impl_(impl), base_(base), lights_(table_slots(impl)),
           streams_(impl.p_.settings.streams) {
         const auto& techniques = impl.p_.settings.techniques;
         // Counts only where a technique draws from a table: zeroing them per
@@ -991,6 +991,15 @@ public:
     }
 
 private:
+    // The longest table's size, not the scene's light count: the counts are
+    // cleared per point, and a scene of many emitter triangles (drawn through
+    // the light tree, no table) would otherwise clear a vector that long at
+    // every point and pass (16k triangles: ~0.4 s per pass at 128²).
+    static std::size_t table_slots(const Impl& impl) {
+        std::size_t n = 0;
+        for (const LightChoice& c : impl.choices_) n = std::max(n, c.lights.size());
+        return n;
+    }
     int slot(int k, const ScrambledSobol& seq, std::uint32_t index) const {
         const LightChoice& c = impl_.choices_[k];
         const double u = seq.get_1d(index, 1);
@@ -1256,7 +1265,6 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         power.push_back(light.power(scene.bounding_radius()));
         tiny_shapes.push_back(tiny_shape_of(light));
     }
-    const double radius = scene.bounding_radius();
     // Few lights: `uniform` and `power` keep their per-point tables over the
     // lights that reach x (no draw wasted on the others).
     const bool many = integrated.size() > std::size_t(kManyIntegratedLights);
@@ -1264,14 +1272,14 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         const Technique& t = settings.techniques[k];
         if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
         if (t.selection == LightSelection::Uniform && uniform_selector.empty())
-            uniform_selector = LightSelector(LightSelector::Kind::Uniform, scene.lights(), integrated, radius);
+            uniform_selector = scene.light_selector(LightSelector::Kind::Uniform, false);
         if (t.selection == LightSelection::Power && power_selector.empty())
-            power_selector = LightSelector(LightSelector::Kind::Power, scene.lights(), integrated, radius);
+            power_selector = scene.light_selector(LightSelector::Kind::Power, false);
         if (t.selection == LightSelection::Tree && tree_selector.empty())
-            tree_selector = LightSelector(LightSelector::Kind::Tree, scene.lights(), integrated, radius);
+            tree_selector = scene.light_selector(LightSelector::Kind::Tree, false);
     }
     if (plan.sample_delta_lights)
-        delta_selector = LightSelector(LightSelector::Kind::Tree, scene.lights(), delta, radius);
+        delta_selector = scene.light_selector(LightSelector::Kind::Tree, true);
 }
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {

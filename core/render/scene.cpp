@@ -126,4 +126,17 @@ void Scene::build_emitter_shapes() {
     emitter_shapes_.commit();
 }
 
+const LightSelector& Scene::light_selector(LightSelector::Kind kind, bool delta) const {
+    if (!committed_) throw std::logic_error("scene: not committed (light selection)");
+    std::lock_guard<std::mutex> lock(selectors_mutex_);
+    std::unique_ptr<LightSelector>& slot = selectors_[delta ? 1 : 0][int(kind)];
+    if (!slot) {
+        std::vector<std::uint32_t> ids;
+        for (std::uint32_t l = 0; l < lights_.size(); ++l)
+            if (lights_[l].is_delta() == delta) ids.push_back(l);
+        slot = std::make_unique<LightSelector>(kind, lights_, ids, bounding_radius_);
+    }
+    return *slot;
+}
+
 }  // namespace omis

@@ -3,9 +3,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "lights/light.h"
+#include "render/light_selection.h"
 #include "render/receiver.h"
 #include "scene/emitter_shapes.h"
 #include "scene/geometry_scene.h"
@@ -49,6 +52,12 @@ public:
     const std::vector<std::uint32_t>& unshaped_lights() const { return unshaped_lights_; }
     // Radius of a sphere around the origin holding every mesh and local light.
     double bounding_radius() const { return bounding_radius_; }
+    // The light selection of `kind` over the non-delta lights (delta = false)
+    // or the delta lights (true), in light-id order, as LightSelector builds
+    // it with bounding_radius(). Built on first use and kept, so bakes of one
+    // scene share one light tree (16k emissive triangles: ~10 ms a build).
+    // After commit; any thread.
+    const LightSelector& light_selector(LightSelector::Kind kind, bool delta) const;
 
 private:
     void require_uncommitted_light(std::uint32_t light) const;
@@ -63,6 +72,8 @@ private:
     std::size_t analytic_lights_ = 0;
     double bounding_radius_ = 1;
     bool committed_ = false;
+    mutable std::mutex selectors_mutex_;
+    mutable std::unique_ptr<LightSelector> selectors_[2][3];  // [delta][kind]
 };
 
 }  // namespace omis

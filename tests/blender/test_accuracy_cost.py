@@ -87,8 +87,8 @@ def test_halving_prediction():
       relative spread of ~1/√(2·streams·rounds), small), stable to ~2 %;
     - the fitted β (least squares over ≤ 4 passes spanning ~8× in time, each point
       stable to ~2 %): ±0.03, i.e. ±(t2/t1)^0.03 ≈ ±3 % in the ratio;
-    - where a budget ends in the pass schedule: passes double, and the last takes the
-      time left (1–3× the samples before it); as each pass's estimate joins the
+    - where a budget ends in the pass schedule: one round, half the time left, and the
+      last takes the rest (about the samples before it); as each pass's estimate joins the
       others' as an independent one, the error reached at a given time moves by up
       to ~10 % with the size of that last pass;
     - time itself: the two bakes run at different moments on a shared 2-core

@@ -1,0 +1,122 @@
+// Small bakes' fixed cost (issue 9 items 4–5): under a time budget the first
+// pass is one round for every strategy, and a scene's light selectors are
+// built once and shared by its bakes.
+#include <catch2/catch.hpp>
+
+#include <vector>
+
+#include "bake/bake.h"
+#include "render/scene.h"
+#include "render/techniques.h"
+
+using namespace omis;
+
+namespace {
+
+// A 2 m floor (two triangles, UVs over [0,1]²) under a 1 m rect light at 1 m.
+void floor_scene(Scene& scene, std::vector<float>& positions,
+                 std::vector<std::uint32_t>& triangles, std::vector<float>& uvs) {
+    positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    triangles = {0, 1, 2, 0, 2, 3};
+    for (std::uint32_t i : triangles)
+        uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
+    MeshInput m;
+    m.name = "floor";
+    m.positions = ScalarArray::of(positions.data(), 4, 3);
+    m.triangles = IndexArray{triangles.data(), 2, 3};
+    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
+    scene.add_mesh(m);
+    scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
+                                    Vec3(2, 2, 2), false, kPi));
+    scene.commit();
+}
+
+}  // namespace
+
+TEST_CASE("a time budget's first pass is one round, whatever the strategy", "[bake]") {
+    Scene scene;
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    floor_scene(scene, positions, triangles, uvs);
+    for (Strategy strategy :
+         {Strategy::Balance, Strategy::OptimalDirect, Strategy::OptimalProgressive}) {
+        BakeSettings s;
+        s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
+                                 *parse_technique("uniform/area")};
+        s.lighting.samples = {2, 3};  // one round: 5 samples
+        s.lighting.rounds = 1 << 20;
+        s.lighting.strategy = strategy;
+        s.width = s.height = 16;
+        s.time_budget = 1e-9;  // spent before the first pass ends: it alone runs
+        const BakeResult r = bake(scene, s);
+        INFO("strategy " << int(strategy));
+        CHECK(r.stats.status == BakeStatus::TimeBudget);
+        CHECK(r.stats.passes == 1);
+        REQUIRE(r.stats.covered == 16u * 16u);
+        for (std::size_t i = 0; i < r.samples.size(); ++i)
+            if (r.mask[i] > 0) CHECK(r.samples[i] == 5u);
+    }
+}
+
+TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes exactly N",
+          "[bake]") {
+    Scene scene;
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    floor_scene(scene, positions, triangles, uvs);
+    // One round; two and a final 2; four rounds; eight.
+    for (long long n : {5LL, 12LL, 20LL, 40LL}) {
+        BakeSettings s;
+        s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
+                                 *parse_technique("uniform/area")};
+        s.lighting.samples = {2, 3};
+        s.lighting.strategy = Strategy::OptimalDirect;
+        s.samples = n;
+        s.time_budget = 1000;  // passes (a probe first), never reached
+        s.width = s.height = 16;
+        const BakeResult r = bake(scene, s);
+        INFO("samples " << n);
+        CHECK(r.stats.status == BakeStatus::Complete);
+        CHECK(r.stats.passes >= (n > 5 ? 2 : 1));
+        CHECK(r.stats.samples == std::uint64_t(n) * r.stats.covered);
+        for (std::size_t i = 0; i < r.samples.size(); ++i)
+            if (r.mask[i] > 0) CHECK(r.samples[i] == std::uint32_t(n));
+        if (n == 20) {
+            // The pass that replaces the probe draws rounds 0–3 again, all of
+            // them (4× the probe; the budget is far off): the values of a
+            // bake in one pass.
+            BakeSettings whole = s;
+            whole.time_budget = 0;
+            CHECK(r.stats.passes == 2);
+            CHECK(r.value == bake(scene, whole).value);
+        }
+    }
+}
+
+TEST_CASE("a scene builds each light selector once, as LightSelector would", "[bake]") {
+    Scene lit;  // 40 triangle lights, every other one two-sided
+    std::vector<std::uint32_t> integrated;
+    for (int k = 0; k < 40; ++k) {
+        const double x = -1 + 0.05 * k;
+        lit.add_light(make_triangle_light(Vec3(x, 0, 1), Vec3(x + 0.04, 0, 1),
+                                          Vec3(x, 0.1 * (1 + k % 3), 1.2), Vec3(1, 1, 1),
+                                          k % 2 == 0));
+        integrated.push_back(std::uint32_t(k));
+    }
+    lit.commit();
+    for (auto kind : {LightSelector::Kind::Uniform, LightSelector::Kind::Power,
+                      LightSelector::Kind::Tree}) {
+        const LightSelector& kept = lit.light_selector(kind, false);
+        CHECK(&kept == &lit.light_selector(kind, false));  // built once
+        const LightSelector built(kind, lit.lights(), integrated, lit.bounding_radius());
+        REQUIRE(kept.size() == built.size());
+        for (double y : {-0.7, 0.0, 0.4})
+            for (std::uint32_t l : integrated)
+                CHECK(kept.pmf(Vec3(0.3, y, 0), Vec3(0, 0, 1), l) ==
+                      built.pmf(Vec3(0.3, y, 0), Vec3(0, 0, 1), l));
+    }
+    CHECK(lit.light_selector(LightSelector::Kind::Tree, true).empty());  // no delta lights
+    Scene uncommitted;
+    CHECK_THROWS_AS(uncommitted.light_selector(LightSelector::Kind::Tree, false),
+                    std::logic_error);
+}
