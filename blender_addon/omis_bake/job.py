@@ -213,6 +213,7 @@ class BakeJob:
         store.last_error_p95 = stats["error_p95"]
         store.last_halving_seconds = stats["halving_seconds"]
         store.last_halving_measured = stats["halving_measured"]
+        store.last_error_measured = stats["error_measured"]
         store.last_plan = stats["plan"]
         return stats
 
@@ -253,6 +254,9 @@ class BakeJob:
             "covered": covered,
             "samples_per_texel": samples / covered if covered else 0.0,
             "mean_relative_error": mean_error,
+            # A noise threshold measures the error from independent streams;
+            # otherwise each texel's one sequence leaves an upper estimate.
+            "error_measured": bool(s.use_noise_target),
             "max_relative_error": max((u.stats["max_relative_error"] for u in units),
                                       default=0.0),
             "passes": max((u.stats.get("passes", 0) for u in units), default=0),

@@ -44,7 +44,8 @@ def accuracy_line(stats):
     more = format_seconds(stats["halving_seconds"])
     halving = (f"an estimated {more} more (from the bake's convergence)"
                if stats["halving_measured"] else f"at most {more} more")
-    return (f'error {100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
+    bound = "" if stats.get("error_measured") else "≤ "
+    return (f'error {bound}{100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
             f'for 95 % of texels; halving it: {halving}')
 
 

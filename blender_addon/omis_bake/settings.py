@@ -175,6 +175,10 @@ _RESULTS = (
     ("last_halving_measured", BoolProperty, "Last Halving Time Measured",
      "Whether the halving time comes from the last bake's measured convergence (else it is "
      "the 1/√time upper bound)"),
+    ("last_error_measured", BoolProperty, "Last Error Measured",
+     "Whether the last bake's error was measured (a noise threshold: independently scrambled "
+     "streams per texel) or is an upper estimate (one scrambled sequence per texel, the least "
+     "noise: its error computed as for independent samples)"),
     ("last_plan", StringProperty, "Last Sampling Plan",
      "The sampling methods and sample counts chosen (the effect plan)"),
 )

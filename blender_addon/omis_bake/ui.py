@@ -111,7 +111,10 @@ def _draw_last(layout, props):
     _figure(box, "Time", f"{operators.format_seconds(props.last_seconds)} "
                          f"({props.last_status})")
     _figure(box, "Samples per texel", f"{props.last_samples_per_texel:.1f}")
-    _figure(box, "Error (mean)", f"{100 * props.last_mean_error:.2f} %")
+    # Without a noise threshold the error is an upper estimate (one sequence
+    # per texel: computed as for independent samples).
+    bound = "" if props.last_error_measured else "≤ "
+    _figure(box, "Error (mean)", f"{bound}{100 * props.last_mean_error:.2f} %")
     _figure(box, "Error (95 % of texels)", f"≤ {100 * props.last_error_p95:.2f} %")
     more = operators.format_seconds(props.last_halving_seconds)
     if props.last_halving_measured:

@@ -76,6 +76,11 @@ def test_figures_everywhere():
     check(bpy.ops.omis.bake(samples=10 ** 6, time_budget=0.6, margin=0) == {'FINISHED'},
           "operator with a time limit")
     check(props.last_halving_measured, "a time limit's passes give a measured halving time")
+    # One sequence per texel: the error is an upper estimate; a noise threshold measures it.
+    check(not props.last_error_measured, "without a noise threshold the error is a bound")
+    check(bpy.ops.omis.bake(samples=64, use_noise_target=True, noise_target=0.01, margin=0)
+          == {'FINISHED'}, "operator with a noise threshold")
+    check(props.last_error_measured, "a noise threshold's streams measure the error")
 
 
 def test_halving_prediction():
