@@ -145,6 +145,7 @@ struct PointLighting::Impl {
     // centre and corners), so a light that reaches part of a texel keeps its
     // share wherever in the texel it was probed.
     bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
+    void mix_in_uniform(int k, const SurfacePoint* probes, int n_probes);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
@@ -284,7 +285,8 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
         if (!sampler_applies(light, t.sampler, x, n)) continue;
         double w = 1.0;
         if (t.selection == LightSelection::Power) w = p_.power[l];
-        if (t.selection == LightSelection::Unoccluded) w = unoccluded_irradiance(light, x, n);
+        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
+            w = unoccluded_irradiance(light, x, n);
         c.lights.push_back(l);
         c.probability.push_back(w);
         largest = std::max(largest, w);
@@ -302,6 +304,10 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
         c.cdf.push_back(running);
     }
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
+    if (t.selection == LightSelection::Defensive) {
+        const SurfacePoint point{x, n, n};
+        mix_in_uniform(k, &point, 1);
+    }
     return !c.lights.empty();
 }
 
@@ -322,7 +328,7 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
     c.cdf.clear();
     auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
         if (t.selection == LightSelection::Power) return p_.power[l];
-        if (t.selection == LightSelection::Unoccluded)
+        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
             return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
         return 1.0;
     };
@@ -357,7 +363,35 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
         c.cdf.push_back(running);
     }
     c.cdf.back() = 1.0;
+    if (t.selection == LightSelection::Defensive) mix_in_uniform(k, probes, n_probes);
     return true;
+}
+
+// `defensive` selection: technique k's table (unoccluded probabilities) becomes
+// half that and half uniform over the lights that reach some probe, so a light
+// the unoccluded weights undervalue — one shadowed where it is bright — keeps
+// a fair share of a single technique's samples. Lights reaching no probe keep
+// their tiny share (unbiased wherever the technique is active).
+void PointLighting::Impl::mix_in_uniform(int k, const SurfacePoint* probes, int n_probes) {
+    const Technique& t = p_.settings.techniques[k];
+    LightChoice& c = choices_[k];
+    std::vector<char> reaches(c.lights.size(), 0);
+    int reaching = 0;
+    for (std::size_t i = 0; i < c.lights.size(); ++i) {
+        const Light& light = p_.scene.lights()[c.lights[i]];
+        for (int j = 0; j < n_probes && !reaches[i]; ++j)
+            reaches[i] = sampler_applies(light, t.sampler, probes[j].x, probes[j].n);
+        reaching += reaches[i];
+    }
+    if (reaching == 0) return;
+    double running = 0;
+    for (std::size_t i = 0; i < c.lights.size(); ++i) {
+        c.probability[i] = 0.5 * c.probability[i] + (reaches[i] ? 0.5 / reaching : 0.0);
+        running += c.probability[i];
+        c.cdf[i] = running;
+    }
+    // The probabilities still sum to 1 (up to rounding): the CDF's end is exact.
+    c.cdf.back() = 1.0;
 }
 
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
@@ -1043,7 +1077,8 @@ const LightSelector* LightingContext::selector(LightSelection selection) const {
         case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
         case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
         case LightSelection::Tree: return &tree_selector;
-        case LightSelection::Unoccluded: return nullptr;
+        case LightSelection::Unoccluded:
+        case LightSelection::Defensive: return nullptr;
     }
     return nullptr;
 }
