@@ -9,7 +9,8 @@ namespace {
 // Python argument.
 omis::capi::DirectLightingRef lighting_job(const Scene& scene, const TechniqueArgs& t, int rounds,
                                            const std::string& strategy,
-                                           const py::handle& seed, double beta, double cutoff) {
+                                           const py::handle& seed, double beta, double cutoff,
+                                           int streams) {
     omis::capi::DirectLightingRef job(omisNewDirectLighting(scene.get()));
     if (!job) raise_pending_error();
     OMISDirectLighting l = job.get();
@@ -20,6 +21,7 @@ omis::capi::DirectLightingRef lighting_job(const Scene& scene, const TechniqueAr
         omisSetDirectLightingCounts(l, t.samples.data(), int(t.samples.size()));
     }
     omisSetDirectLightingInt(l, "rounds", rounds);
+    omisSetDirectLightingInt(l, "streams", streams);
     omisSetDirectLightingString(l, "strategy", c_string(strategy, "strategy"));
     omisSetDirectLightingInt(l, "seed", std::int64_t(seed_value(seed)));
     omisSetDirectLightingFloat(l, "beta", beta);
@@ -41,7 +43,7 @@ py::dict stats_dict(const OMISDirectLightingStats& stats, const std::string& pla
 py::object direct_lighting(const Scene& scene, const py::handle& points_in,
                            const py::handle& normals_in, const py::handle& techniques,
                            const py::handle& samples, int rounds, const std::string& strategy,
-                           const py::handle& seed, double beta, double cutoff,
+                           const py::handle& seed, double beta, double cutoff, int streams,
                            const py::object& progress, bool return_stats) {
     auto points = as_float_array(points_in, "points");
     auto normals = as_float_array(normals_in, "normals");
@@ -54,7 +56,7 @@ py::object direct_lighting(const Scene& scene, const py::handle& points_in,
     const TechniqueArgs t = technique_args(techniques, samples);
     if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
         bad("progress", "expected a callable taking the fraction done");
-    const auto job = lighting_job(scene, t, rounds, strategy, seed, beta, cutoff);
+    const auto job = lighting_job(scene, t, rounds, strategy, seed, beta, cutoff, streams);
 
     py::array_t<double> value({P, py::ssize_t(3)}), variance({P, py::ssize_t(3)});
     OMISDirectLightingStats stats{};
@@ -145,7 +147,7 @@ normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
     m.def("direct_lighting", &direct_lighting, py::arg("scene"), py::arg("points"),
           py::arg("normals"), py::arg("techniques") = py::none(), py::arg("samples") = py::none(),
           py::arg("rounds") = 1, py::arg("strategy") = "optimal-direct", py::arg("seed") = 0,
-          py::kw_only(), py::arg("beta") = 2.0, py::arg("cutoff") = 0.1,
+          py::kw_only(), py::arg("beta") = 2.0, py::arg("cutoff") = 0.1, py::arg("streams") = 1,
           py::arg("progress") = py::none(), py::arg("return_stats") = false,
           R"doc(E_direct/π per RGB channel at shading points of a committed scene (SPEC §3, §6).
 
@@ -155,6 +157,9 @@ or one comma-separated string, with samples: one count per technique per round;
 techniques=None lets the effect plan choose both (samples must then be None).
 rounds: R; strategy: a MIS strategy name (see STRATEGIES); seed: results depend on
 it only, not on the thread count. beta, cutoff: heuristic options.
+streams: independently randomized streams per point (1..4): 1 = one scrambled
+sequence, the least error (variance is then the independent-draw formula, an
+upper estimate); more = variance is the streams' measured spread.
 progress: optional callable, called with the fraction done about every 50 ms on
 the calling thread (and with 1.0 at the end); returning False stops the work and
 raises omis.Cancelled. Ctrl-C stops it too (KeyboardInterrupt).

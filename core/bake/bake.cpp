@@ -69,11 +69,13 @@ std::vector<SurfacePoint> corner_points(const Mesh& mesh, bool smooth) {
 }
 
 // Running statistics of one point over passes, beside its running mean (kept
-// in the output image itself, weighted by samples): Σ w_p² · variance_p of
-// luminance and Σ w_p, w_p the samples of pass p. 16 bytes a point: the sum is
-// a double, as variances of values beyond ~1e19 overflow a float.
+// in the output image itself, weighted by samples): Σ w_p² · own variance_p
+// of luminance (the independent-draw formula), the running mean's variance as
+// reported, and Σ w_p, w_p the samples of pass p. Doubles: variances of values
+// beyond ~1e19 overflow a float.
 struct PointState {
-    double variance_sum = 0;
+    double own_sum = 0;
+    double variance = 0;
     std::uint32_t weight = 0;
     std::uint16_t passes = 0;
     bool done = false;
@@ -86,7 +88,7 @@ constexpr int kMinPassesForNoiseTarget = 3;
 double relative_error(const PointState& s, const float* mean) {
     if (s.weight == 0) return 0;
     const double value = luminance(Vec3(mean[0], mean[1], mean[2]));
-    const double var = double(s.variance_sum) / (double(s.weight) * s.weight);
+    const double var = s.variance;
     if (value <= 0) return var > 0 ? 1.0 : 0.0;
     // A mean beyond the float range of the image has no meaningful noise.
     if (!std::isfinite(value) || !std::isfinite(var)) return std::numeric_limits<double>::infinity();
@@ -243,7 +245,37 @@ struct Pass {
 struct Shaded {
     std::size_t i;
     double value[3];
-    double stream_variance, own_variance;  // luminance
+    double own_variance;      // luminance, independent-draw formula
+    StreamEstimates streams;  // when the bake has several streams
+};
+
+// A point's streams over all passes so far: Σ w·estimate and Σ w per stream
+// (w: the stream's samples in a pass). Their spread is the error of the
+// point's running mean — the passes of one stream continue one sequence, so
+// per-pass errors do not add as if independent (that over-stated a noise
+// target's error up to 10× and stopped it late).
+struct StreamTally {
+    double sum[kMaxSampleStreams] = {}, weight[kMaxSampleStreams] = {};
+    // Var(mean) = Σ w_s (e_s − ē)² / ((S − 1) W); -1 with fewer than two streams.
+    double variance() const {
+        double total = 0, mean = 0;
+        int used = 0;
+        for (int s = 0; s < kMaxSampleStreams; ++s)
+            if (weight[s] > 0) {
+                total += weight[s];
+                mean += sum[s];
+                ++used;
+            }
+        if (used < 2) return -1;
+        mean /= total;
+        double spread = 0;
+        for (int s = 0; s < kMaxSampleStreams; ++s)
+            if (weight[s] > 0) {
+                const double d = sum[s] / weight[s] - mean;
+                spread += weight[s] * d * d;
+            }
+        return spread / ((used - 1) * total);
+    }
 };
 
 // One bake of one mesh: the layout, the lighting, the points' running state,
@@ -289,6 +321,8 @@ private:
     bool progressive_;
     BakeResult result_;
     std::vector<PointState> state_;
+    std::vector<StreamTally> tallies_;  // per point, when settings_.lighting.streams > 1
+    tbb::enumerable_thread_specific<std::vector<double>> spread_scratch_;  // accumulate's
     tbb::enumerable_thread_specific<PointLighting> shaders_;
 
     // Progress counts shaded samples; cancel is checked at every point so a
@@ -309,6 +343,9 @@ private:
 
 BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
     settings.lighting.receiver = scene.mesh_receiver(settings.mesh);  // render/receiver.h
+    // A noise target stops on the error, so the error must be measured, not
+    // bounded: independent streams (DirectLightingSettings::streams).
+    if (settings.noise_target > 0) settings.lighting.streams = kMaxSampleStreams;
     return settings;
 }
 
@@ -323,6 +360,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
       budget_(plan_samples(context_, settings_.samples, settings_.lighting.rounds)),
       progressive_(settings_.time_budget > 0 || settings_.noise_target > 0),
       state_(layout_.count),
+      tallies_(settings_.lighting.streams > 1 ? layout_.count : 0),
       shaders_([this] { return PointLighting(context_); }) {
     result_.width = layout_.width;
     result_.height = layout_.height;
@@ -372,21 +410,21 @@ bool Baker::keep_going() {
 void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                         std::vector<Shaded>& out) {
     if (!layout_.covered(i) || state_[i].done || cancel_.load(std::memory_order_relaxed)) return;
-    Shaded r{i, {}, 0, 0};
+    Shaded r{i, {}, 0, {}};
     double variance[3], own[3];
+    StreamEstimates* streams = tallies_.empty() ? nullptr : &r.streams;
     try {
         if (layout_.lightmap()) {
             const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals);
             shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint, r.value,
-                         variance, pass.counts, own);
+                         variance, pass.counts, own, streams);
         } else {
             shader.shade(i, pass.first_round, pass.rounds, layout_.points[i], nullptr, r.value,
-                         variance, pass.counts, own);
+                         variance, pass.counts, own, streams);
         }
     } catch (const LightingCancelled&) {
         return;  // keep_going: the bake is being cancelled
     }
-    r.stream_variance = luminance(Vec3(variance[0], variance[1], variance[2]));
     r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
     out.push_back(r);
     if (progress_ && (shaded_.fetch_add(pass.samples, std::memory_order_relaxed) % 64) <
@@ -395,19 +433,16 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
 }
 
 // A tile's points join their running means. Their variance: the
-// independent-draw formula (stable per point, but too high for correlated
-// draws) scaled by the tile's ratio of the streams' honest estimate to it
-// (many degrees of freedom once pooled over the tile), or the point's own
-// streams' estimate where that is larger.
+// independent-draw formula over the passes (stable per point, but too high
+// for correlated draws); with several streams, scaled by the tile's ratio of
+// the streams' spread to it (many degrees of freedom once pooled over the
+// tile), or the point's own streams' spread where that is larger.
 void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
-    double sum_stream = 0, sum_own = 0;
-    for (const Shaded& r : tile) {
-        sum_stream += r.stream_variance;
-        sum_own += r.own_variance;
-    }
-    const bool pooled = sum_own > 0;
-    const double ratio = pooled ? sum_stream / sum_own : 1.0;
-    for (const Shaded& r : tile) {
+    std::vector<double>& spread = spread_scratch_.local();
+    spread.assign(tile.size(), -1);
+    double sum_spread = 0, sum_own = 0;
+    for (std::size_t t = 0; t < tile.size(); ++t) {
+        const Shaded& r = tile[t];
         PointState& s = state_[r.i];
         ++s.passes;
         s.weight += pass.samples;
@@ -415,17 +450,34 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
         float* mean = &result_.value[3 * r.i];
         for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
             if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
+        s.own_sum += double(pass.samples) * pass.samples * r.own_variance;
+        s.variance = s.own_sum / (double(s.weight) * s.weight);
+        if (tallies_.empty()) continue;
+        StreamTally& tally = tallies_[r.i];
+        const double per_round = double(pass.samples) / pass.rounds;
+        for (int k = 0; k < kMaxSampleStreams; ++k) {
+            const double w = r.streams.rounds[k] * per_round;
+            tally.sum[k] += w * r.streams.luminance[k];
+            tally.weight[k] += w;
+        }
+        spread[t] = tally.variance();
+        if (spread[t] < 0) continue;
+        sum_spread += spread[t];
+        sum_own += s.variance;
+    }
+    const double ratio = sum_own > 0 ? sum_spread / sum_own : 1.0;
+    for (std::size_t t = 0; t < tile.size(); ++t) {
+        PointState& s = state_[tile[t].i];
         // The larger of the two: a tile's ratio comes mostly from its smooth
         // texels, and would understate a texel whose own streams disagree
         // more (rare bright samples, a shadow edge).
-        const double variance =
-            pooled ? std::max(r.own_variance * ratio, r.stream_variance) : r.stream_variance;
-        s.variance_sum += double(pass.samples) * pass.samples * variance;
+        if (spread[t] >= 0) s.variance = std::max(s.variance * ratio, spread[t]);
         // A point whose samples all agreed (nothing seen yet, typically a
         // shadowed texel that rare samples light) gives no error estimate:
         // it is not done, but keeps sampling while others still need to.
         if (settings_.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-            s.variance_sum > 0 && relative_error(s, mean) <= settings_.noise_target)
+            s.variance > 0 && relative_error(s, &result_.value[3 * tile[t].i]) <=
+                                  settings_.noise_target)
             s.done = true;
     }
 }
@@ -492,7 +544,7 @@ bool Baker::plan_pass(Pass& pass) {
 bool Baker::noise_target_met() const {
     return settings_.noise_target > 0 &&
            std::all_of(state_.begin(), state_.end(), [&](const PointState& s) {
-               return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance_sum == 0);
+               return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance == 0);
            });
 }
 

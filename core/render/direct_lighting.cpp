@@ -65,7 +65,7 @@ struct PointLighting::Impl {
 
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, const int* counts, double* value, double* variance,
-               double* own_variance);
+               double* own_variance, StreamEstimates* streams);
 
     // The per-sample loop's pieces (shade): which techniques take part, delta
     // lights at one position, one sample into its estimators.
@@ -93,7 +93,7 @@ struct PointLighting::Impl {
     // they go to, the delta lights' sums, and the point's estimate from them.
     struct RoundPlan {
         int rounds = 0;
-        int stream_rounds[kSampleStreams] = {};
+        int stream_rounds[kMaxSampleStreams] = {};
         int streams_used = 0;
         bool by_stream = false;  // each stream's estimate is kept
         bool in_whole = false;   // ... as sums inside the whole's estimators
@@ -103,11 +103,11 @@ struct PointLighting::Impl {
                            bool fresh, Estimators& all, Estimators* per);
     struct DeltaSums {
         bool per_round = false;  // a position per round (else at_centre)
-        Vec3 sum[kSampleStreams], sum2, at_centre;
+        Vec3 sum[kMaxSampleStreams], sum2, at_centre;
     };
     Vec3 point_estimate(const Active& active, const RoundPlan& plan, const Estimators& all,
                         const Estimators* per, const DeltaSums& delta, Vec3& own_variance,
-                        Vec3& error_variance);
+                        Vec3& error_variance, StreamEstimates* streams);
     // Sum of the estimates (and their own variance estimates, if asked).
     // The estimators' results stay in results_ (main, hidden) until the next call.
     Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
@@ -721,8 +721,8 @@ void PointLighting::Impl::set_stream(const Estimators& all, int s) {
 bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* balance,
                                             const int* stream_rounds, double optimal_inflation) {
     double rounds = 0, mean_o = 0, mean_b = 0;
-    double opt[kSampleStreams], bal[kSampleStreams];
-    for (int s = 0; s < kSampleStreams; ++s) {
+    double opt[kMaxSampleStreams], bal[kMaxSampleStreams];
+    for (int s = 0; s < kMaxSampleStreams; ++s) {
         if (!stream_rounds[s]) continue;
         opt[s] = luminance(optimal[s]);
         bal[s] = luminance(balance[s]);
@@ -733,7 +733,7 @@ bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* bal
     mean_o /= rounds;
     mean_b /= rounds;
     double spread_o = 0, spread_b = 0;
-    for (int s = 0; s < kSampleStreams; ++s) {
+    for (int s = 0; s < kMaxSampleStreams; ++s) {
         if (!stream_rounds[s]) continue;
         spread_o += stream_rounds[s] * (opt[s] - mean_o) * (opt[s] - mean_o);
         spread_b += stream_rounds[s] * (bal[s] - mean_b) * (bal[s] - mean_b);
@@ -791,14 +791,15 @@ double PointLighting::Impl::whole_alpha_inflation() const {
 class PointLighting::Impl::LightStreams {
 public:
     LightStreams(Impl& impl, std::uint64_t base, const Active& active, int first_round)
-        : impl_(impl), base_(base), lights_(impl.p_.integrated.size()) {
+        : impl_(impl), base_(base), lights_(impl.p_.integrated.size()),
+          streams_(impl.p_.settings.streams) {
         const auto& techniques = impl.p_.settings.techniques;
-        taken_.assign(techniques.size() * kSampleStreams * lights_, 0);
+        taken_.assign(techniques.size() * std::size_t(streams_) * lights_, 0);
         for (int k : active.lights) {
             if (!uses_table(k)) continue;
             const int per_round = impl.p_.settings.samples[k];
-            for (int s = 0; s < kSampleStreams; ++s) {
-                const int earlier = first_round > s ? (first_round - s + kSampleStreams - 1) / kSampleStreams : 0;
+            for (int s = 0; s < streams_; ++s) {
+                const int earlier = first_round > s ? (first_round - s + streams_ - 1) / streams_ : 0;
                 const ScrambledSobol seq = technique_sequence(k, s);
                 for (std::uint32_t i = 0; i < std::uint32_t(earlier * per_round); ++i)
                     ++count(k, s, slot(k, seq, i));
@@ -810,13 +811,13 @@ public:
         return !t.bsdf && !impl_.p_.selector(t.selection);
     }
     ScrambledSobol technique_sequence(int k, int s) const {
-        return ScrambledSobol(base_ ^ mix64(std::uint64_t(k) * kSampleStreams + std::uint64_t(s) + 1));
+        return ScrambledSobol(base_ ^ mix64(std::uint64_t(k) * streams_ + std::uint64_t(s) + 1));
     }
     // Technique k's draw `index` of stream s: its light and shape point.
     TableDraw draw(int k, int s, const ScrambledSobol& seq, std::uint32_t index) {
         TableDraw d;
         d.slot = slot(k, seq, index);
-        const std::uint64_t id = (std::uint64_t(k) * kSampleStreams + std::uint64_t(s)) << 32 |
+        const std::uint64_t id = (std::uint64_t(k) * streams_ + std::uint64_t(s)) << 32 |
                                  std::uint64_t(d.slot + 1);
         const ScrambledSobol light_sequence(base_ ^ mix64(0x6a09e667f3bcc909ull ^ id));
         light_sequence.get_2d(count(k, s, d.slot)++, 2, d.u1, d.u2);
@@ -831,11 +832,12 @@ private:
             std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1));
     }
     std::uint32_t& count(int k, int s, int slot) {
-        return taken_[(std::size_t(k) * kSampleStreams + std::size_t(s)) * lights_ + std::size_t(slot)];
+        return taken_[(std::size_t(k) * streams_ + std::size_t(s)) * lights_ + std::size_t(slot)];
     }
     Impl& impl_;
     std::uint64_t base_;
     std::size_t lights_;
+    int streams_;
     std::vector<std::uint32_t> taken_;  // per technique, stream and table slot
 };
 
@@ -846,8 +848,9 @@ PointLighting::Impl::RoundPlan PointLighting::Impl::plan_rounds(int first_round,
                                                                 bool want_error) const {
     RoundPlan plan;
     plan.rounds = rounds;
-    for (int r = first_round; r < first_round + rounds; ++r) ++plan.stream_rounds[r % kSampleStreams];
-    plan.streams_used = int(std::count_if(plan.stream_rounds, plan.stream_rounds + kSampleStreams,
+    const int streams = p_.settings.streams;
+    for (int r = first_round; r < first_round + rounds; ++r) ++plan.stream_rounds[r % streams];
+    plan.streams_used = int(std::count_if(plan.stream_rounds, plan.stream_rounds + streams,
                                           [](int m) { return m > 0; }));
     plan.by_stream = plan.streams_used >= 2 && (want_error || is_optimal(p_.settings.strategy));
     plan.in_whole = streams_in_whole(p_.settings.strategy, plan.by_stream);
@@ -862,7 +865,7 @@ void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPla
     if (active.all.empty()) return;
     const std::uint64_t fresh_key = fresh ? std::uint64_t(1) << 50 : 0;  // uncached counts
     const bool hidden = p_.plan.bsdf_invisible_lights && !active.lights.empty();
-    for (int s = -1; s < kSampleStreams; ++s) {
+    for (int s = -1; s < p_.settings.streams; ++s) {
         if (s >= 0 && (!plan.by_stream || plan.in_whole || plan.stream_rounds[s] == 0)) continue;
         const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
         Estimators& e = s < 0 ? all : per[s];
@@ -872,7 +875,7 @@ void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPla
             e.hidden = &estimator(hidden_cache_, key | active.light_mask, active.lights, counts,
                                   fresh);
     }
-    set_streams(all, plan.in_whole ? kSampleStreams : 0);
+    set_streams(all, plan.in_whole ? p_.settings.streams : 0);
 }
 
 // The point's estimate once its rounds are in: the whole's estimate, then
@@ -883,8 +886,8 @@ void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPla
 Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& plan,
                                          const Estimators& all, const Estimators* per,
                                          const DeltaSums& delta, Vec3& own_variance,
-                                         Vec3& error_variance) {
-    constexpr int K = kSampleStreams;
+                                         Vec3& error_variance, StreamEstimates* streams) {
+    constexpr int K = kMaxSampleStreams;  // streams past settings.streams hold no rounds
     const int rounds = plan.rounds;
     const bool sampled = !active.all.empty();
     const bool optimal = is_optimal(p_.settings.strategy);
@@ -923,7 +926,15 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
                              std::max(0.0, spread.z)) / double(rounds - 1);
     }
     error_variance = own_variance;
-    if (!plan.by_stream) return total;
+    if (!plan.by_stream) {
+        if (streams && plan.streams_used == 1)  // the one stream's estimate is the point's
+            for (int s = 0; s < K; ++s)
+                if (plan.stream_rounds[s]) {
+                    streams->rounds[s] = plan.stream_rounds[s];
+                    streams->luminance[s] = luminance(total);
+                }
+        return total;
+    }
     // Var(mean) = Σ m_s (e_s − ē)² / ((S − 1) M): the streams' estimates e_s
     // are independent with variance σ²/m_s.
     Vec3 e[K], mean;
@@ -932,6 +943,18 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
         e[s] = delta.sum[s] / double(plan.stream_rounds[s]);
         if (sampled) e[s] += use_balance ? stream_balance[s] : stream_estimate[s];
         mean += e[s] * (double(plan.stream_rounds[s]) / rounds);
+    }
+    if (streams) {
+        // optimal-direct's streams share the α fitted to them all, so their
+        // spread is in-sample optimistic; rule 3's inflation widens it (as in
+        // balance_is_better) before callers combine passes from it.
+        const double widen = sampled && direct && !use_balance ? std::sqrt(inflation) : 1.0;
+        const double centre = luminance(mean);
+        for (int s = 0; s < K; ++s) {
+            if (!plan.stream_rounds[s]) continue;
+            streams->rounds[s] = plan.stream_rounds[s];
+            streams->luminance[s] = centre + widen * (luminance(e[s]) - centre);
+        }
     }
     error_variance = Vec3();
     for (int s = 0; s < K; ++s) {
@@ -946,7 +969,7 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
 void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
-                                double* own_variance_out) {
+                                double* own_variance_out, StreamEstimates* streams) {
     const int* counts = counts_in ? counts_in : p_.settings.samples.data();
     ++point_serial_;  // invalidates the per-point solid-angle cache
     Active active;
@@ -955,7 +978,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // Round r belongs to stream r mod K; each (technique, stream) has its own
     // scrambled sequence, continued from round to round. Delta lights, when
     // positions vary, take one position per round from a sequence of their own.
-    constexpr int K = kSampleStreams;
+    const int K = p_.settings.streams;
     const std::uint64_t base = mix64(p_.settings.seed ^ mix64(stream));
     auto sequence = [&](std::size_t k, int s) {
         return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
@@ -963,7 +986,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     LightStreams light_streams(*this, base, active, first_round);
     const std::size_t delta_group = p_.settings.techniques.size();
     const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
-    Estimators all{nullptr, nullptr}, per[K] = {};
+    Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
     set_up_estimators(active, plan, counts, counts_in != nullptr, all, per);
 
     // Delta lights are evaluated once per round where positions vary or lights
@@ -1004,7 +1027,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;
-    const Vec3 total = point_estimate(active, plan, all, per, delta, own_variance, error_variance);
+    if (streams) *streams = StreamEstimates{};
+    const Vec3 total =
+        point_estimate(active, plan, all, per, delta, own_variance, error_variance, streams);
     for (int c = 0; c < 3; ++c) {
         value[c] = total[c];
         if (variance) variance[c] = error_variance[c];
@@ -1027,6 +1052,10 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
     for (int n : s.samples)
         if (n < 0) throw std::invalid_argument("samples: counts must not be negative");
     if (s.rounds < 1) throw std::invalid_argument("rounds: must be at least 1");
+    if (s.streams < 1 || s.streams > kMaxSampleStreams)
+        throw std::invalid_argument("streams: must lie in [1, " +
+                                    std::to_string(kMaxSampleStreams) + "], got " +
+                                    std::to_string(s.streams));
     // Draw indices (round × count + j) and per-point totals are ints.
     long long per_point = 0;
     for (int n : s.samples) per_point += (long long)n * s.rounds;
@@ -1094,16 +1123,16 @@ PointLighting::PointLighting(PointLighting&& other) noexcept
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
                           const SurfacePoint& centre, const Footprint* footprint,
                           double value[3], double variance[3], const int* counts,
-                          double own_variance[3]) {
+                          double own_variance[3], StreamEstimates* streams) {
     impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
-                 own_variance);
+                 own_variance, streams);
 }
 
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
                           const Vec3& n, const Vec3& ng, double value[3],
                           double variance[3]) {
     impl_->shade(stream, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
-                 variance, nullptr);
+                 variance, nullptr, nullptr);
 }
 
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,
@@ -1147,12 +1176,14 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const Vec3 x(points[3 * i], points[3 * i + 1], points[3 * i + 2]);
             const Vec3 n(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2]);
-            // Variance as for independent draws: an upper bound for these
-            // correlated ones (the baker pools the streams' honest estimate
-            // over neighbouring texels; lone points have no neighbours).
+            // One stream: the variance as for independent draws, an upper
+            // estimate for these stratified ones. Several: the streams'
+            // spread (three degrees of freedom with four: noisy per point).
+            const bool spread = settings.streams > 1;
             try {
                 shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr,
-                             value + 3 * i, nullptr, nullptr, variance + 3 * i);
+                             value + 3 * i, spread ? variance + 3 * i : nullptr, nullptr,
+                             spread ? nullptr : variance + 3 * i);
             } catch (const LightingCancelled&) {
                 return;
             }

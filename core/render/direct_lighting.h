@@ -25,6 +25,15 @@ struct DirectLightingSettings {
     Strategy strategy = Strategy::OptimalDirect;
     StrategyOptions options;
     std::uint64_t seed = 0;
+    // Independently randomized streams a point's rounds are dealt to (round r
+    // to stream r mod streams; 1..kMaxSampleStreams). 1: one scrambled
+    // sequence per technique, the least error per sample; the variance it
+    // reports is the independent-draw formula, an over-estimate for these
+    // stratified draws (2–30× on smooth lighting, tests/core/test_bake.cpp).
+    // More: the spread of the streams' estimates measures the actual error —
+    // what a noise target stops on — at the cost of the stratification
+    // across streams (2–3× the error per sample with 4 on the Cycles race).
+    int streams = 1;
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
     Receiver receiver;
@@ -105,10 +114,18 @@ public:
     virtual SurfacePoint at(double u, double v) const = 0;
 };
 
-// Rounds of a point are dealt to this many independently randomized streams
-// (round r to stream r mod kSampleStreams). The spread of the streams'
-// estimates measures the error of correlated low-discrepancy draws honestly.
-constexpr int kSampleStreams = 4;
+// The most independently randomized streams a point's rounds may be dealt to
+// (DirectLightingSettings::streams); 4 give the error estimate three degrees
+// of freedom per point before pooling.
+constexpr int kMaxSampleStreams = 4;
+
+// A point's estimate per randomization stream (luminance) and the rounds
+// behind each, for callers that combine a point's passes and measure the
+// error of the combination from the streams' spread (the baker).
+struct StreamEstimates {
+    int rounds[kMaxSampleStreams] = {};
+    double luminance[kMaxSampleStreams] = {};
+};
 
 // Shades one point at a time; one per thread, as it keeps scratch memory.
 class PointLighting {
@@ -122,11 +139,11 @@ public:
     // rounds [first_round, first_round + rounds) of its draws. Every sample's
     // dimensions (footprint position, light selection, light shape or BSDF
     // direction) come from one Owen-scrambled Sobol' sequence per technique
-    // and stream, fixed by (seed, stream): unbiased, stratified, and
-    // continued — not restarted — by a later first_round. The variance comes
-    // from the spread between the kSampleStreams independent streams when at
-    // least two hold rounds, else from the estimator's own (independent-draw)
-    // formula.
+    // and randomization stream (settings.streams), fixed by (seed, stream):
+    // unbiased, stratified, and continued — not restarted — by a later
+    // first_round. The variance comes from the spread between the streams'
+    // estimates when at least two hold rounds, else from the estimator's own
+    // (independent-draw) formula.
     // footprint: null = every sample at `centre`; else each sample draws its
     // own position from it (delta lights then take one position per round).
     // counts: samples per technique in each of these rounds (null = the
@@ -135,10 +152,12 @@ public:
     // variance as computed for independent draws (many degrees of freedom,
     // but too high for correlated draws): callers may pool the ratio of the
     // two over neighbouring points. variance may be null (then the streams
-    // are not compared, which saves their estimators).
+    // are not compared, which saves their estimators). streams, if given,
+    // receives each stream's estimate of these rounds.
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
-               const int* counts = nullptr, double own_variance[3] = nullptr);
+               const int* counts = nullptr, double own_variance[3] = nullptr,
+               StreamEstimates* streams = nullptr);
     // A fixed point x with shading normal n and geometric normal ng.
     void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);

@@ -107,6 +107,13 @@ void set_rounds(Lighting& l, const ParameterValue& v) {
                                     " is out of range [1, 1048576]");
     l.settings.rounds = int(v.integer);
 }
+void set_streams(Lighting& l, const ParameterValue& v) {
+    if (v.integer < 1 || v.integer > omis::kMaxSampleStreams)
+        throw std::invalid_argument("streams: " + std::to_string(v.integer) +
+                                    " is out of range [1, " +
+                                    std::to_string(omis::kMaxSampleStreams) + "]");
+    l.settings.streams = int(v.integer);
+}
 void set_seed(Lighting& l, const ParameterValue& v) {
     l.settings.seed = std::uint64_t(v.integer);
 }
@@ -141,6 +148,7 @@ struct Parameter {
 };
 constexpr Parameter kParameters[] = {
     {"rounds", kInt, set_rounds},           {"seed", kInt, set_seed},
+    {"streams", kInt, set_streams},
     {"beta", kFloat, set_beta},             {"cutoff", kFloat, set_cutoff},
     {"techniques", kString, set_techniques}, {"strategy", kString, set_strategy},
 };

@@ -451,12 +451,19 @@ TEST_CASE("an emissive mesh lights receivers and does not shadow itself", "[dire
             const double exact =
                 2 * polygon_irradiance(x, n, {{-0.5, -0.5, h}, {0.5, -0.5, h}, {0.5, 0.5, h},
                                               {-0.5, 0.5, h}}) / kPi;
+            // 64 rounds: far away (7,3,-2) the bsdf draws carry ~5e-4 of the
+            // answer (their balance weight) through hits of a 5e-3 sr light,
+            // ~0.26 per copy; with a few rounds most copies have none, and the
+            // copies' spread (one scrambled sequence: the solid-angle draws
+            // alone vary little) cannot show that share's absence.
+            constexpr int kRounds = 64;
             DirectLightingStats stats;
-            const Estimate e = light_copies(scene, x, n, {"bsdf", "uniform/solid-angle"}, {4, 8}, 4,
-                                            Strategy::Balance, 9, &stats);
+            const Estimate e = light_copies(scene, x, n, {"bsdf", "uniform/solid-angle"}, {4, 8},
+                                            kRounds, Strategy::Balance, 9, &stats);
             INFO("h " << h << " x " << x.x << "," << x.y << "," << x.z << " exact " << exact);
             CHECK(stats.rays_traced > 0);
-            CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error + resolution(exact, 48));
+            CHECK(std::abs(e.mean - exact) <=
+                  kSigmas * e.standard_error + resolution(exact, 12 * kRounds));
         }
     }
 }

@@ -9,6 +9,7 @@
 // probability for a normal mean. Seeds are fixed, so a pass is reproducible.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -57,6 +58,7 @@ void add_lights(Scene& scene) {
 
 struct Copies {
     double mean = 0, variance = 0;  // of one copy's value
+    double reported_variance = 0;   // mean over copies of the estimate's own (independent-draw)
 };
 
 Copies light_copies(const Scene& scene, const Vec3& x, const Vec3& n, const std::string& name,
@@ -75,7 +77,10 @@ Copies light_copies(const Scene& scene, const Vec3& x, const Vec3& n, const std:
     direct_lighting(scene, points.data(), normals.data(), kCopies, s, value.data(),
                     variance.data());
     Copies c;
-    for (int i = 0; i < kCopies; ++i) c.mean += value[3 * i + 1] / kCopies;
+    for (int i = 0; i < kCopies; ++i) {
+        c.mean += value[3 * i + 1] / kCopies;
+        c.reported_variance += variance[3 * i + 1] / kCopies;
+    }
     for (int i = 0; i < kCopies; ++i)
         c.variance += (value[3 * i + 1] - c.mean) * (value[3 * i + 1] - c.mean) / (kCopies - 1);
     return c;
@@ -98,10 +103,17 @@ TEST_CASE("light tables: selection by the shape's coordinate is unbiased among s
             for (int rounds : {1, 5, 64}) {  // a lone draw, a partial block, a full net
                 const Copies c = light_copies(scene, x, up, name, rounds);
                 const double exact = exact_value(x, up);
+                // A full net of one scrambled sequence can make the estimate a
+                // two-point variable (a light's share of the selection ends
+                // inside one stratum; with projected-solid-angle nothing else
+                // varies): the copies then often all agree although only their
+                // expectation is exact. σ is then the larger of the copies'
+                // spread and the estimate's own independent-draw variance,
+                // which bounds these stratified draws' error from above.
+                const double sigma = std::sqrt(std::max(c.variance, c.reported_variance) / kCopies);
                 INFO(name << " at (" << x.x << ", " << x.y << ", " << x.z << "), " << rounds
-                          << " rounds: mean " << c.mean << ", exact " << exact);
-                CHECK(std::abs(c.mean - exact) <=
-                      kSigmas * std::sqrt(c.variance / kCopies) + 1e-12 * exact);
+                          << " rounds: mean " << c.mean << ", exact " << exact << ", σ " << sigma);
+                CHECK(std::abs(c.mean - exact) <= kSigmas * sigma + 1e-12 * exact);
             }
 }
 

@@ -211,6 +211,30 @@ def test_deterministic_for_a_seed():
     assert np.isfinite(big[0]).all()
 
 
+def test_streams_trade_error_for_a_measured_variance():
+    # 256 copies of one point (each its own randomization): their spread is
+    # the true error. With one sequence the reported variance is the
+    # independent-draw formula, which must not under-state it; with four
+    # streams it is their spread (3 degrees of freedom per copy), whose RMS
+    # over 256 copies is within a few % of the truth, so [0.8, 1.25] holds
+    # unless the estimate is wrong.
+    scene = omis.Scene()
+    scene.add_rect_light((-0.5, -0.5, 1.0), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    scene.add_rect_light((0.2, -0.5, 0.4), (0.0, 1.0, 0.0), (1.0, 0.0, 0.0), (3.0, 3.0, 3.0))
+    scene.commit()
+    points = np.tile([0.3, 0.1, 0.0], (256, 1))
+    normals = np.tile([0.0, 0.0, 1.0], (256, 1))
+    for streams in (1, 4):
+        value, variance = omis.direct_lighting(scene, points, normals, "bsdf,unoccluded/area",
+                                               [1, 1], rounds=64, strategy="balance", seed=3,
+                                               streams=streams)
+        true_sd = value[:, 1].std()
+        reported = math.sqrt(variance[:, 1].mean())
+        assert reported >= 0.8 * true_sd, (streams, reported, true_sd)
+        if streams > 1:
+            assert reported <= 1.25 * true_sd, (streams, reported, true_sd)
+
+
 def test_heuristic_options_reach_the_native_job():
     # The power heuristic with beta = 1 and the cutoff heuristic with cutoff = 0 are
     # the balance heuristic (SPEC §1); another beta is not.
@@ -375,6 +399,8 @@ def test_bad_scene_input_names_the_argument(call, argument):
         (dict(seed=2**64), "seed"),
         (dict(beta=0.0, strategy="power"), "beta"),
         (dict(cutoff=2.0, strategy="cutoff"), "cutoff"),
+        (dict(streams=0), "streams"),
+        (dict(streams=5), "streams"),
         (dict(progress=3), "progress"),
     ],
 )

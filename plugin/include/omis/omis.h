@@ -271,7 +271,11 @@ OMIS_API void omisReleaseDirectLighting(OMISDirectLighting lighting);
  * OMIS_ERROR_INVALID_ARGUMENT naming the parameter:
  *   integers: "rounds" [1] R (SPEC §1), 1..2^20; "seed" [0] (the 64 bits as
  *             uint64): results are a function of the seed only, not of the
- *             number of threads
+ *             number of threads; "streams" [1] independently randomized
+ *             streams per point, 1..4: 1 = one scrambled sequence (least
+ *             error; the variance output is then the independent-draw
+ *             formula, an upper estimate), more = the variance output is the
+ *             streams' measured spread, at some cost in error
  *   floats:   "beta" [2] power heuristic exponent, > 0; "cutoff" [0.1] cutoff
  *             heuristic threshold, in [0, 1]
  *   strings:  "techniques" [""] comma-separated names (SPEC §3), for example
