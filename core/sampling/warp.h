@@ -42,7 +42,7 @@ struct Cone {
 Point2 sample_uniform_triangle(double u1, double u2);
 Point2 invert_uniform_triangle(const Point2& b);
 
-// Uniform over the unit disk (area measure, pdf 1/π), polar map.
+// Uniform over the unit disk (area measure, pdf 1/π), concentric map (Shirley–Chiu).
 Point2 sample_uniform_disk(double u1, double u2);
 Point2 invert_uniform_disk(const Point2& p);
 
