@@ -164,11 +164,12 @@ struct PointLighting::Impl {
     // scenes with very many lights, where the table would not pay.)
     struct SolidAngleCache {
         std::uint64_t point = ~0ull;
-        std::optional<SphericalRect> rect;
-        std::optional<SphericalTriangle> triangle;
+        Vec3 n;  // the receiver normal the warp was made for
+        std::optional<CosineWarped<SphericalRect>> rect;
+        std::optional<CosineWarped<SphericalTriangle>> triangle;
     };
     static constexpr std::size_t kMaxCachedLights = 1024;
-    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x);
+    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x, const Vec3& n);
     std::optional<LightSample> sample(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                       const Vec3& n, double u1, double u2);
     static std::optional<LightSample> sample_cached(const SolidAngleCache& c, double u1,
@@ -207,22 +208,29 @@ struct PointLighting::Impl {
 };
 
 const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
-                                                                             const Vec3& x) {
+                                                                             const Vec3& x,
+                                                                             const Vec3& n) {
     const Light& light = p_.scene.lights()[l];
     if (light.type != LightType::Rect && light.type != LightType::Triangle) return nullptr;
     if (p_.scene.lights().size() > kMaxCachedLights) return nullptr;
     if (solid_angle_cache_.size() != p_.scene.lights().size())
         solid_angle_cache_.resize(p_.scene.lights().size());
     SolidAngleCache& c = solid_angle_cache_[l];
-    if (c.point != point_serial_) {
+    if (c.point != point_serial_ || c.n.x != n.x || c.n.y != n.y || c.n.z != n.z) {
         c.point = point_serial_;
+        c.n = n;
+        // RectLight/TriangleLight::sample_solid_angle(x, n, …)'s shape, prepared.
+        c.rect.reset();
+        c.triangle.reset();
         if (light.type == LightType::Rect) {
             const auto r = rect_reaching(light, x);  // spread: only the part that reaches x
-            c.rect = r ? SphericalRect::make(x, r->corner, r->edge_u, r->edge_v) : std::nullopt;
+            const auto s = r ? SphericalRect::make(x, r->corner, r->edge_u, r->edge_v)
+                             : std::nullopt;
+            if (s) c.rect.emplace(*s, n);
+        } else if (const auto s = SphericalTriangle::make(x, light.triangle.p0,
+                                                          light.triangle.p1, light.triangle.p2)) {
+            c.triangle.emplace(*s, n);
         }
-        else
-            c.triangle = SphericalTriangle::make(x, light.triangle.p0, light.triangle.p1,
-                                                 light.triangle.p2);
     }
     return &c;
 }
@@ -233,7 +241,7 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
     const Light& light = p_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
-        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
     std::optional<LightSample> s;
     if (!c) s = sample_light(light, sampler, x, n, u1, u2);
     else s = sample_cached(*c, u1, u2);
@@ -244,8 +252,8 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
 std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCache& cache,
                                                               double u1, double u2) {
     // RectLight/TriangleLight::sample_solid_angle's draw, from the prepared shape.
-    if (cache.rect) return uniform_solid_angle_sample(*cache.rect, u1, u2);
-    if (cache.triangle) return uniform_solid_angle_sample(*cache.triangle, u1, u2);
+    if (cache.rect) return warped_solid_angle_sample(*cache.rect, u1, u2);
+    if (cache.triangle) return warped_solid_angle_sample(*cache.triangle, u1, u2);
     return std::nullopt;
 }
 
@@ -254,7 +262,7 @@ double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec
     const Light& light = p_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(light, x)) sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
-        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
     if (!c) return light_pdf(light, sampler, x, n, w);
     if (c->rect) return c->rect->pdf(w);
     if (c->triangle) return c->triangle->pdf(w);

@@ -115,6 +115,81 @@ Point2 invert_uniform_triangle(const Point2& b) {
     return {su * su, su > 0 ? std::clamp(b.y / su, 0.0, 1.0) : 0.0};
 }
 
+namespace {
+
+// Density ∝ lerp(x, a, b) on [0,1) (a, b ≥ 0, a + b > 0), inverted in closed form
+// in the form that keeps precision when a ≈ b.
+double sample_linear(double u, double a, double b) {
+    if (u == 0 && a == 0) return 0;
+    const double x = u * (a + b) / (a + std::sqrt((1 - u) * a * a + u * b * b));
+    return std::min(x, 1.0 - 1e-16);
+}
+
+}  // namespace
+
+namespace {
+
+// Density ∝ the piecewise-linear function through v[0..g] at 0, 1/g, …, 1:
+// the segment by its trapezoid mass, then the linear piece within it.
+double sample_piecewise_linear(double u, const double* v, int g) {
+    double total = 0;
+    for (int i = 0; i < g; ++i) total += v[i] + v[i + 1];
+    double below = 0;
+    for (int i = 0; i < g; ++i) {
+        const double mass = (v[i] + v[i + 1]) / total;
+        if (u < below + mass || i == g - 1) {
+            const double t = std::clamp((u - below) / mass, 0.0, 1.0);
+            return std::min((i + sample_linear(t, v[i], v[i + 1])) / g, 1.0 - 1e-16);
+        }
+        below += mass;
+    }
+    return 0;
+}
+
+// The node weights' bilinear interpolation at p, and their integral over [0,1)².
+double interpolate(const Point2& p, const double* w, int g) {
+    const int i = std::min(g - 1, int(p.x * g)), j = std::min(g - 1, int(p.y * g));
+    const double s = p.x * g - i, t = p.y * g - j;
+    const int n = g + 1;
+    return (1 - s) * (1 - t) * w[j * n + i] + s * (1 - t) * w[j * n + i + 1] +
+           (1 - s) * t * w[(j + 1) * n + i] + s * t * w[(j + 1) * n + i + 1];
+}
+
+double integral(const double* w, int g) {
+    const int n = g + 1;
+    double sum = 0;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            sum += w[j * n + i] * ((i == 0 || i == g) ? 0.5 : 1.0) * ((j == 0 || j == g) ? 0.5 : 1.0);
+    return sum / (double(g) * g);
+}
+
+constexpr int kMaxPatches = 4;
+
+}  // namespace
+
+Point2 sample_piecewise_bilinear(double u1, double u2, const double* w, int g) {
+    g = std::clamp(g, 1, kMaxPatches);
+    const int n = g + 1;
+    // Marginal in y at the nodes: the trapezoid rule in x is exact for the
+    // piecewise-linear rows.
+    double marginal[kMaxPatches + 1], row[kMaxPatches + 1];
+    for (int j = 0; j < n; ++j) {
+        marginal[j] = 0;
+        for (int i = 0; i < n; ++i) marginal[j] += w[j * n + i] * ((i == 0 || i == g) ? 0.5 : 1.0);
+    }
+    const double y = sample_piecewise_linear(u2, marginal, g);
+    const int j = std::min(g - 1, int(y * g));
+    const double t = y * g - j;
+    for (int i = 0; i < n; ++i) row[i] = (1 - t) * w[j * n + i] + t * w[(j + 1) * n + i];
+    return {sample_piecewise_linear(u1, row, g), y};
+}
+
+double pdf_piecewise_bilinear(const Point2& p, const double* w, int g) {
+    g = std::clamp(g, 1, kMaxPatches);
+    return interpolate(p, w, g) / integral(w, g);
+}
+
 Point2 sample_uniform_disk(double u1, double u2) { return concentric_disk(u1, u2); }
 
 Point2 invert_uniform_disk(const Point2& p) { return invert_concentric_disk(p); }
