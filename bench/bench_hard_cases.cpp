@@ -4,6 +4,7 @@
 //   omis_bench_hard_cases [copies] [reference rounds] [case name part] [spp,...]
 //   omis_bench_hard_cases --cost STRATEGY SPP TEXELS   (see cost_run)
 //   omis_bench_hard_cases --allocation COPIES          (see allocation_sweep)
+//   omis_bench_hard_cases --allocation-gain COPIES [spp,...]  (see allocation_gain)
 // Errors are against a balance reference of `reference rounds` rounds over 16
 // copies; bias/σ is the rms over points of (mean error)/(σ of one balance
 // estimate at that spp), whose noise floor for an unbiased strategy is about
@@ -94,7 +95,87 @@ int allocation_sweep(int copies) {
     return 0;
 }
 
+// --allocation-gain COPIES [spp,...]: sample allocation (issue 10, item 2)
+// against fixed counts at equal samples, per case and spp: optimal-direct's
+// MSE with allocation (a quarter of the rounds as the pilot, the copy's 8
+// points as the tile) over its MSE with one sample per technique per round,
+// (and over the same pilot and later call keeping one sample per technique
+// a round: the choice alone), the shading-time ratio of allocation to fixed
+// counts (serial, one run, the least of three), and their product —
+// the ratio of variance at equal time (< 1: allocation wins).
+int allocation_gain(int copies, const std::vector<int>& spps) {
+    std::printf("sample allocation vs fixed counts, optimal-direct, %d copies of 8 points\n"
+                "  MSE ratio (± 1 standard error of the paired ratio), time ratio, "
+                "MSE×time ratio, mean shares\n", copies);
+    double log_sum = 0;
+    int cells = 0;
+    for (const HardCase& hc : suite()) {
+        Scene scene;
+        hc.build(scene);
+        scene.commit();
+        const int points = int(hc.points.size());
+        const auto ref = reference(scene, hc, 4096, 16, 987654321);
+        std::printf("%s (%zu techniques)\n", hc.name.c_str(), hc.techniques.size());
+        for (int spp : spps) {
+            // Three interleaved repetitions (the same values), the least time
+            // of each: a burst of load on the shared machine hits one, not all.
+            AllocatedRun fixed, kept, alloc;
+            for (int rep = 0; rep < 3; ++rep) {
+                const AllocatedRun f =
+                    run_allocated(scene, hc, Strategy::OptimalDirect, spp, 0, copies, 42);
+                const AllocatedRun k = run_allocated(scene, hc, Strategy::OptimalDirect, spp,
+                                                     spp / 4, copies, 42, false);
+                const AllocatedRun a =
+                    run_allocated(scene, hc, Strategy::OptimalDirect, spp, spp / 4, copies, 42);
+                if (rep == 0 || f.seconds < fixed.seconds) fixed = f;
+                if (rep == 0 || k.seconds < kept.seconds) kept = k;
+                if (rep == 0 || a.seconds < alloc.seconds) alloc = a;
+            }
+            const Errors e_fixed = errors(fixed.values, ref, points, copies);
+            const Errors e_kept = errors(kept.values, ref, points, copies);
+            const Errors e_alloc = errors(alloc.values, ref, points, copies);
+            auto paired = [](const Errors& x, const Errors& y, double& se) {
+                const double ratio = x.mse / y.mse;
+                double var = 0;
+                for (std::size_t i = 0; i < x.squared.size(); ++i) {
+                    const double d = x.squared[i] - ratio * y.squared[i];
+                    var += d * d / (x.squared.size() - 1);
+                }
+                se = std::sqrt(var / x.squared.size()) / y.mse;
+                return ratio;
+            };
+            double se, se_kept;
+            const double ratio = paired(e_alloc, e_fixed, se);
+            const double ratio_kept = paired(e_alloc, e_kept, se_kept);
+            const double time = alloc.seconds / fixed.seconds;
+            std::printf("  %4d spp: MSE %6.3f ± %5.3f (vs kept %6.3f ± %5.3f)  time %5.3f "
+                        "(kept %5.3f)  MSE×time %6.3f  shares", spp, ratio, se, ratio_kept,
+                        se_kept, time, kept.seconds / fixed.seconds, ratio * time);
+            for (double w : alloc.shares) std::printf(" %.2f", w);
+            std::printf("\n");
+            log_sum += std::log(ratio * time);
+            ++cells;
+        }
+    }
+    std::printf("geometric mean MSE×time ratio: %.3f over %d cells\n",
+                std::exp(log_sum / std::max(1, cells)), cells);
+    return 0;
+}
+
+std::vector<int> parse_counts(const char* list) {
+    std::vector<int> counts;
+    for (const char* p = list; *p;) {
+        char* end;
+        counts.push_back(int(std::strtol(p, &end, 10)));
+        p = *end ? end + 1 : end;
+    }
+    return counts;
+}
+
 int main(int argc, char** argv) {
+    if (argc >= 3 && std::string(argv[1]) == "--allocation-gain")
+        return allocation_gain(std::atoi(argv[2]),
+                               parse_counts(argc > 3 ? argv[3] : "4,16,64,256"));
     if (argc == 3 && std::string(argv[1]) == "--allocation")
         return allocation_sweep(std::atoi(argv[2]));
     if (argc == 5 && std::string(argv[1]) == "--cost")
@@ -103,14 +184,7 @@ int main(int argc, char** argv) {
     const int reference_rounds = argc > 2 ? std::atoi(argv[2]) : 4096;
     const std::string only = argc > 3 ? argv[3] : "";  // cases whose name holds this
     std::vector<int> counts = {1, 4, 16, 64, 256};
-    if (argc > 4) {
-        counts.clear();
-        for (const char* p = argv[4]; *p;) {
-            char* end;
-            counts.push_back(int(std::strtol(p, &end, 10)));
-            p = *end ? end + 1 : end;
-        }
-    }
+    if (argc > 4) counts = parse_counts(argv[4]);
     if (copies < 2 || reference_rounds < 1 ||
         std::any_of(counts.begin(), counts.end(), [](int n) { return n < 1; })) {
         std::fprintf(stderr,

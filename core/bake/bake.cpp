@@ -9,12 +9,16 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <deque>
+#include <sstream>
 #include <limits>
 #include <mutex>
+#include <numeric>
 #include <stdexcept>
 
 #include "bake/uv_raster.h"
 #include "bake/vertex_points.h"
+#include "mis/allocation.h"
 
 namespace omis {
 namespace {
@@ -239,6 +243,29 @@ struct Pass {
     int first_round = 0, rounds = 0;
     const int* counts = nullptr;  // null: the settings' counts
     std::uint32_t samples = 0;    // per point
+    const std::vector<DrawnRounds>* earlier = nullptr;  // allocated tiles: their calls so far
+};
+
+// Sample allocation (issue 10; BakeSettings::allocate_samples). The first pass
+// is every tile's pilot: it records the samples of some of the tile's texels
+// (at most kPilotSamples, so choosing costs little beside shading), and the
+// tile's shares follow from them (mis/allocation.h). Later passes draw the
+// same samples per texel as without allocation, in rounds of at least
+// kMinAllocatedRound samples (and kRoundPerTechnique per technique, so that
+// the shares can move) split by those shares, each technique keeping at
+// least kAllocationFloor of them and one sample a round: a technique that
+// alone covers what the pilot did not see keeps drawing (a defensive mix).
+constexpr int kPilotSamples = 512;
+constexpr int kMinAllocatedRound = 8, kRoundPerTechnique = 4;
+constexpr double kAllocationFloor = 0.05;
+
+// A tile's shares and every call its points took so far (the sequences of a
+// later call continue after them).
+struct TileAllocation {
+    std::vector<double> shares;
+    std::vector<DrawnRounds> drawn;
+    std::deque<std::vector<int>> counts;  // the calls' counts (stable addresses)
+    int next_round = 0;
 };
 
 // A point's estimate of one pass, before it joins the running mean.
@@ -302,6 +329,13 @@ private:
     void shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                      std::vector<Shaded>& out);
     void accumulate(const Pass& pass, const std::vector<Shaded>& tile);
+    // The pass as the tile's points took it (an allocated tile's own rounds).
+    Pass shade_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
+                    std::vector<Shaded>& out);
+    void pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
+                    std::vector<Shaded>& out);
+    Pass allocated_pass(TileAllocation& t, const Pass& pass);
+    void fill_allocation_stats();
     void run_pass(const Pass& pass);
     bool plan_pass(Pass& pass);
     void run_passes();
@@ -339,6 +373,10 @@ private:
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
     BakeStatus status_ = BakeStatus::Complete;
+
+    // Sample allocation: on for this bake, and per tile.
+    bool allocate_ = false;
+    std::vector<TileAllocation> tiles_;
 };
 
 BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
@@ -387,6 +425,13 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
                    : single_first ? 1
                                   : settings_.rounds_per_pass;
     last_done_ = budget_.last.empty();
+    allocate_ = settings_.allocate_samples && is_optimal(settings_.lighting.strategy) &&
+                context_.techniques.size() >= 2 && budget_.full_rounds >= 2;
+    if (allocate_) {
+        tiles_.resize(layout_.tiles);
+        // A bake of a sample budget: a quarter of it is the pilot, the rest one pass.
+        if (!progressive_) next_rounds_ = std::max(1, budget_.full_rounds / 4);
+    }
 }
 
 void Baker::report_progress() {
@@ -417,10 +462,10 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
         if (layout_.lightmap()) {
             const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals);
             shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint, r.value,
-                         variance, pass.counts, own, streams);
+                         variance, pass.counts, own, streams, pass.earlier);
         } else {
             shader.shade(i, pass.first_round, pass.rounds, layout_.points[i], nullptr, r.value,
-                         variance, pass.counts, own, streams);
+                         variance, pass.counts, own, streams, pass.earlier);
         }
     } catch (const LightingCancelled&) {
         return;  // keep_going: the bake is being cancelled
@@ -482,6 +527,118 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
     }
 }
 
+Pass Baker::shade_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
+                       std::vector<Shaded>& out) {
+    if (!allocate_) {
+        layout_.tile_points(tile, [&](std::size_t i) { shade_point(shader, i, pass, out); });
+        return pass;
+    }
+    TileAllocation& t = tiles_[tile];
+    if (t.shares.empty()) {
+        pilot_tile(shader, tile, pass, out);
+        return pass;
+    }
+    Pass allocated = allocated_pass(t, pass);
+    layout_.tile_points(tile, [&](std::size_t i) { shade_point(shader, i, allocated, out); });
+    t.drawn.push_back({allocated.first_round, allocated.rounds, allocated.counts});
+    t.next_round += allocated.rounds;
+    allocated.earlier = nullptr;  // t.drawn now holds this call too
+    return allocated;
+}
+
+// The tile's first pass with the settings' counts, recording every stride-th
+// texel's samples, each texel's integrand scaled by 1/its estimate (so bright
+// texels do not decide for the dim ones); then the tile's shares.
+void Baker::pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
+                       std::vector<Shaded>& out) {
+    const std::vector<int>& counts = settings_.lighting.samples;
+    AllocationPilot pilot(int(counts.size()), 1, counts);
+    const int stride =
+        std::max(1, int(std::ceil(double(kTile * kTile) * pass.samples / kPilotSamples)));
+    int visited = 0;
+    layout_.tile_points(tile, [&](std::size_t i) {
+        const bool record = visited++ % stride == 0;
+        const std::size_t before = out.size();
+        shader.record_into(record ? &pilot : nullptr);
+        shade_point(shader, i, pass, out);
+        shader.record_into(nullptr);
+        const double value =
+            out.size() > before ? luminance(Vec3(out.back().value[0], out.back().value[1],
+                                                 out.back().value[2]))
+                                : 0.0;
+        if (record) pilot.end_point(value > 0 && std::isfinite(value) ? 1 / value : 0.0,
+                                    out.size() > before ? pass.rounds : 0);
+    });
+    TileAllocation& t = tiles_[tile];
+    t.shares.assign(counts.begin(), counts.end());  // the pilot's own split
+    if (pilot.rounds() > 0 && pilot.samples() > 0) {
+        const double floor =
+            std::min(kAllocationFloor, 0.5 / double(context_.techniques.size()));
+        t.shares = optimal_shares(pilot, pilot.cost(), floor);
+    }
+    t.drawn.push_back({pass.first_round, pass.rounds, pass.counts});
+    t.next_round = pass.first_round + pass.rounds;
+}
+
+// A later pass of an allocated tile: the pass's samples per texel in rounds
+// of the tile's shares — as many rounds as keep at least kMinAllocatedRound
+// samples each, kRoundPerTechnique a technique (a pass's last partial round:
+// one round).
+Pass Baker::allocated_pass(TileAllocation& t, const Pass& pass) {
+    const int P = budget_.per_round;
+    const int least = std::max<int>(kMinAllocatedRound,
+                                    kRoundPerTechnique * int(context_.techniques.size()));
+    int rounds = 1;
+    if (!pass.counts) {
+        int group = pass.rounds;  // settings rounds per allocated round
+        for (int g = 1; g <= pass.rounds; ++g)
+            if (pass.rounds % g == 0 && g * P >= least) {
+                group = g;
+                break;
+            }
+        rounds = pass.rounds / group;
+    }
+    t.counts.push_back(counts_from_shares(t.shares, int(pass.samples) / rounds));
+    Pass p = pass;
+    p.first_round = t.next_round;
+    p.rounds = rounds;
+    p.counts = t.counts.back().data();
+    p.earlier = &t.drawn;
+    return p;
+}
+
+// What the allocation did: each technique's mean share (and range) over the
+// tiles that chose one.
+void Baker::fill_allocation_stats() {
+    BakeStats& stats = result_.stats;
+    if (!allocate_) return;
+    const std::size_t T = settings_.lighting.techniques.size();
+    std::vector<double> sum(T, 0.0), lo(T, 1.0), hi(T, 0.0);
+    std::size_t n = 0;
+    for (const TileAllocation& t : tiles_) {
+        if (t.shares.empty() || t.drawn.size() < 2) continue;  // no allocated pass
+        const double total = std::accumulate(t.shares.begin(), t.shares.end(), 0.0);
+        for (std::size_t k = 0; k < T; ++k) {
+            const double w = t.shares[k] / total;
+            sum[k] += w;
+            lo[k] = std::min(lo[k], w);
+            hi[k] = std::max(hi[k], w);
+        }
+        ++n;
+    }
+    std::ostringstream s;
+    s << "sample allocation: pilot pass of " << (tiles_.empty() || tiles_[0].drawn.empty()
+                                                       ? 0 : tiles_[0].drawn[0].rounds)
+      << " rounds, then " << n << " tiles split their samples (floor "
+      << kAllocationFloor << " a technique)";
+    for (std::size_t k = 0; k < T && n > 0; ++k) {
+        stats.allocated_shares.push_back(sum[k] / n);
+        s << "; " << settings_.lighting.techniques[k].name() << " " << sum[k] / n << " ("
+          << lo[k] << "–" << hi[k] << ")";
+    }
+    stats.allocation = s.str();
+}
+
 void Baker::run_pass(const Pass& pass) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout_.tiles, 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -490,9 +647,7 @@ void Baker::run_pass(const Pass& pass) {
         for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
             if (cancel_.load(std::memory_order_relaxed)) return;
             shaded_tile.clear();
-            layout_.tile_points(tile,
-                                [&](std::size_t i) { shade_point(shader, i, pass, shaded_tile); });
-            accumulate(pass, shaded_tile);
+            accumulate(shade_tile(shader, tile, pass, shaded_tile), shaded_tile);
         }
     });
 }
@@ -569,6 +724,7 @@ void Baker::run_passes() {
         // √1.5 ≈ 1.22 in error.
         const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
         next_rounds_ = int(std::min<double>(1 << 24, std::ceil(growth * pass.rounds)));
+        if (!progressive_) next_rounds_ = budget_.full_rounds;  // after an allocation pilot
         if (noise_target_met()) {
             status_ = BakeStatus::NoiseTarget;
             return;
@@ -663,6 +819,7 @@ BakeResult Baker::run() {
     write_outputs();
     fill_margin();
     fill_stats();
+    fill_allocation_stats();
     return std::move(result_);
 }
 

@@ -39,6 +39,15 @@ struct BakeSettings {
     // texel (its own solve); passes are averaged, weighted by samples.
     int rounds_per_pass = 4;
     int threads = 0;            // worker threads; 0 = all cores
+    // Optimal sample allocation (issue 10): the optimal strategies draw a
+    // pilot pass with the settings' counts, then split each tile's later
+    // passes among the techniques to minimise the optimal estimator's
+    // variance per unit time (mis/allocation.h), every technique keeping a
+    // floor share. Needs two passes or more: a bake of a sample budget then
+    // takes a quarter of its rounds as the pilot. Off by default: it wins at
+    // equal samples in most hard cases but not at equal time (the choice and
+    // the costlier draws it favours; bench/results/hard_cases_allocation_gain.txt).
+    bool allocate_samples = false;
 };
 
 struct BakeStats {
@@ -54,6 +63,10 @@ struct BakeStats {
     std::string plan;                  // EffectPlan::to_string()
     std::vector<std::string> techniques;
     std::vector<int> samples_per_round;
+    // Sample allocation: what it did (empty when off), and each technique's
+    // mean share of the allocated passes' samples over the tiles.
+    std::string allocation;
+    std::vector<double> allocated_shares;
     // After each completed pass: samples, sampling time and mean relative
     // error so far; and from them what halving that error would cost.
     std::vector<BakePassRecord> convergence;

@@ -44,12 +44,14 @@ std::string number(double v) {
 // square must stay finite, as samplers and pdfs use both.
 constexpr double kLargestSize = 1e150, kSmallestSize = 1e-150;
 
-void require_size(double size, const char* what, const std::string& given,
-                  const char* measure) {
+// `what` and `given` make the message, built only on failure (a mesh of
+// 100k emitting triangles spent a third of its commit formatting them).
+template <class What, class Given>
+void require_size(double size, What what, Given given, const char* measure) {
     if (!(size <= kLargestSize))
-        invalid(what, given + " is too large to represent (" + measure + " overflows)");
+        invalid(what(), given() + " is too large to represent (" + measure + " overflows)");
     if (!(size >= kSmallestSize))
-        invalid(what, given + " is too small to represent (" + measure + " underflows)");
+        invalid(what(), given() + " is too small to represent (" + measure + " underflows)");
 }
 
 // Unit vector along v, scaled first so huge or tiny vectors do not overflow
@@ -81,16 +83,25 @@ void require_perpendicular(const Vec3& a, const Vec3& b, const char* what) {
 
 // Blender's spread (SPEC §4): radiance × max(0, 1 − tan a tan θ) × normalisation,
 // a = (π − s)/2. The normalisation 2/(2 + (2a − π) tan a) equals 1/(1 − b cot b)
-// with b = s/2, evaluated by its series where it would cancel.
+// with b = s/2, evaluated by its series where it would cancel. The two
+// constants are the light's: prepared once where many points are weighed.
+struct SpreadProfile {
+    double tan_a = 0, one_minus_b_cot_b = 1;
+    explicit SpreadProfile(double spread) {
+        const double b = 0.5 * spread;
+        one_minus_b_cot_b = b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
+        tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
+    }
+    double factor(double cos_theta) const {
+        const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
+        const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
+        return std::max(0.0, 1 - tan_a * tan_theta) / one_minus_b_cot_b;
+    }
+};
+
 double spread_factor(double cos_theta, double spread) {
     if (spread >= kPi) return 1.0;
-    const double b = 0.5 * spread;
-    const double one_minus_b_cot_b =
-        b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
-    const double tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
-    const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
-    const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
-    return std::max(0.0, 1 - tan_a * tan_theta) / one_minus_b_cot_b;
+    return SpreadProfile(spread).factor(cos_theta);
 }
 
 // Cycles 3.4 spot falloff for the unit direction from the light to the
@@ -186,6 +197,19 @@ std::optional<RectLight> rect_reaching(const Light& l, const Vec3& x) {
                      r.edge_v * (v1 - v0)};
 }
 
+bool ellipse_wholly_reaches(const Light& l, const Vec3& x) {
+    return l.type == LightType::Ellipse && ellipse_reach(l, x).whole;
+}
+
+bool ray_crosses_light(const Light& l, const Vec3& x, const Vec3& w) {
+    switch (l.type) {
+        case LightType::Rect: return l.rect.intersect(x, w).has_value();
+        case LightType::Ellipse: return l.ellipse.intersect(x, w).has_value();
+        case LightType::Triangle: return l.triangle.intersect(x, w).has_value();
+        default: return true;
+    }
+}
+
 const char* light_type_name(LightType type) {
     switch (type) {
         case LightType::Rect: return "rect";
@@ -252,8 +276,9 @@ Light planar_light(LightType type, const char* what, const Vec3& origin, const c
     if (!(length(cross(unit_a, unit_b)) > 0)) invalid(what, "has zero area");
     require_perpendicular(unit_a, unit_b, what);
     const double area = (type == LightType::Ellipse ? kPi : 1.0) * len_a * len_b;
-    require_size(area, (std::string(a_name) + ", " + b_name).c_str(),
-                 number(len_a) + " m × " + number(len_b) + " m", "area");
+    require_size(
+        area, [&] { return std::string(a_name) + ", " + b_name; },
+        [&] { return number(len_a) + " m × " + number(len_b) + " m"; }, "area");
     if (!(spread > 0 && spread <= kPi)) invalid("spread", "must lie in (0, π]");
     Light l;
     l.type = type;
@@ -301,7 +326,9 @@ Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
     const double unit_area = scale > 0 ? 0.5 * length(cross(e1 / scale, e2 / scale)) : 0.0;
     if (!(unit_area > 0)) invalid("triangle light", "has zero area");
     const double area = unit_area * scale * scale;
-    require_size(area, "triangle", "an area of " + number(area) + " m²", "area");
+    require_size(
+        area, [] { return std::string("triangle"); },
+        [&] { return "an area of " + number(area) + " m²"; }, "area");
     Light l;
     l.type = LightType::Triangle;
     l.triangle = TriangleLight{p0, p1, p2};
@@ -617,6 +644,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                                   int cells) {
     constexpr int kTaps = 3, kEdgeTaps = 4;
     const Vec3 normal = normalize(planar_normal(l));
+    const SpreadProfile spread(l.spread);
     const double da = (a1 - a0) / cells, db = (b1 - b0) / cells;
     // Kernel-weighted mean of the spread factor over a cell; `mixed` tells
     // whether the shape's edge crossed it.
@@ -636,7 +664,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                 if (!(d2 > 0) || cos_l <= 0 || cos_x <= 0) continue;
                 const double kernel = cos_l * cos_x / (d2 * d2);
                 k += kernel;
-                if (is_in) gk += kernel * spread_factor(cos_l / std::sqrt(d2), l.spread);
+                if (is_in) gk += kernel * spread.factor(cos_l / std::sqrt(d2));
             }
         mixed = in > 0 && in < taps * taps;
         return k > 0 ? gk / k : 0.0;

@@ -109,6 +109,16 @@ bool sampler_applies(const Light& light, ShapeSampler sampler, const Vec3& x, co
 // (Cycles 3.4); empty when no point of the light can reach x.
 std::optional<RectLight> rect_reaching(const Light& light, const Vec3& x);
 
+// Whether a spread (if any) lets every point of an ellipse light reach x: its
+// solid-angle sampler then draws the whole elliptic cone (SphericalEllipse),
+// else the clipped part by area.
+bool ellipse_wholly_reaches(const Light& light, const Vec3& x);
+
+// Whether the ray x + t·w (t > 0) crosses the shape of a rect, ellipse or
+// triangle light, with the hit tests' slack (true for other types): a cheap
+// test before a density that needs the shape prepared at x.
+bool ray_crosses_light(const Light& light, const Vec3& x, const Vec3& w);
+
 // A direction toward the light drawn by `sampler`, with its solid-angle pdf
 // (sr⁻¹), and the matching pdf evaluation (0 where w misses the light).
 std::optional<LightSample> sample_light(const Light& light, ShapeSampler sampler,

@@ -96,6 +96,7 @@ public:
 
     int num_techniques() const { return N_; }
     int num_channels() const { return C_; }
+    const std::vector<int>& counts() const { return counts_; }
     int completed_rounds() const { return rounds_; }
     Strategy strategy() const { return strategy_; }
     void reset();

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -15,8 +16,11 @@
 #include "render/receiver.h"
 #include "render/light_selection.h"
 #include "render/scene.h"
+#include "render/texel_tables.h"
 
 namespace omis {
+
+class AllocationPilot;
 
 struct DirectLightingSettings {
     std::vector<Technique> techniques;
@@ -79,11 +83,21 @@ public:
     std::vector<int> techniques;  // enabled technique indices
     std::vector<std::uint32_t> integrated, delta;
     std::vector<double> power;  // per light, for `power` selection
+    // Per light, what tells whether a rect or triangle is tiny in solid angle
+    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp).
+    struct TinyShape {
+        Vec3 centroid;
+        double area_limit = std::numeric_limits<double>::infinity();
+    };
+    std::vector<TinyShape> tiny_shapes;
     // Selection of integrated lights for `uniform`, `power` and `tree`
     // (built when a technique uses it), and of delta lights when the plan
     // estimates their sum by drawing some (plan.sample_delta_lights).
     LightSelector uniform_selector, power_selector, tree_selector, delta_selector;
     const LightSelector* selector(LightSelection selection) const;
+    // Per texel (PointLighting::shade's stream), what a bake's later passes
+    // reuse: the techniques taking part and their light tables.
+    mutable TexelTables texel_tables;
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes
@@ -127,6 +141,14 @@ struct StreamEstimates {
     double luminance[kMaxSampleStreams] = {};
 };
 
+// Rounds a point drew earlier with other counts than the settings' (sample
+// allocation between passes, issue 10): a later call continues every
+// technique's sequences after the draws these took.
+struct DrawnRounds {
+    int first_round = 0, rounds = 0;
+    const int* counts = nullptr;  // per technique and round; null: the settings'
+};
+
 // Shades one point at a time; one per thread, as it keeps scratch memory.
 class PointLighting {
 public:
@@ -144,6 +166,10 @@ public:
     // first_round. The variance comes from the spread between the streams'
     // estimates when at least two hold rounds, else from the estimator's own
     // (independent-draw) formula.
+    // stream names the point within the context: with a footprint, or from
+    // its second call on (first_round > 0), the point's techniques and light
+    // tables are kept under it (LightingContext::texel_tables) and reused, so
+    // one stream must always mean the same point and footprint.
     // footprint: null = every sample at `centre`; else each sample draws its
     // own position from it (delta lights then take one position per round).
     // counts: samples per technique in each of these rounds (null = the
@@ -154,13 +180,23 @@ public:
     // two over neighbouring points. variance may be null (then the streams
     // are not compared, which saves their estimators). streams, if given,
     // receives each stream's estimate of these rounds.
+    // earlier: every call before this one for the same point, in order, when
+    // their counts were not all the settings' (their rounds must add up to
+    // first_round; std::invalid_argument otherwise).
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
                const int* counts = nullptr, double own_variance[3] = nullptr,
-               StreamEstimates* streams = nullptr);
+               StreamEstimates* streams = nullptr,
+               const std::vector<DrawnRounds>* earlier = nullptr);
     // A fixed point x with shading normal n and geometric normal ng.
     void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
+
+    // While set, every sample of the points shaded goes to `pilot` too (its
+    // techniques are the settings', its integrand the luminance of f) with
+    // its work (1 + the rays it traced); the caller ends each point
+    // (AllocationPilot::end_point). Null stops recording.
+    void record_into(AllocationPilot* pilot);
 
     LightingCounters counters;
 

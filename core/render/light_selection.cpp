@@ -79,9 +79,11 @@ namespace {
 // their sines and cosines (cos(α − β) = cos α cos β + sin α sin β): four
 // square roots and one division per evaluation, as a draw among 100k lights
 // makes ~34 of them.
+// horizon: whether a light below the horizon of (x, n) gets 0 (a region's
+// points have other normals: then it only weighs less).
 double importance_of(const Vec3& centre, double radius, double power, const Vec3& axis,
                      double cos_theta_o, double sin_theta_o, double cos_theta_e,
-                     bool two_sided, const Vec3& x, const Vec3& n) {
+                     bool two_sided, const Vec3& x, const Vec3& n, bool horizon = true) {
     if (!(power > 0)) return 0;
     const Vec3 d = x - centre;
     const double dist2 = dot(d, d), radius2 = radius * radius;
@@ -112,7 +114,7 @@ double importance_of(const Vec3& centre, double radius, double power, const Vec3
         const double sin_n = std::sqrt(std::max(0.0, 1 - cos_n * cos_n));
         cos_i = cos_n * cos_b + sin_n * sin_b;
     }
-    if (cos_i < -1e-9) return 0;
+    if (horizon && cos_i < -1e-9) return 0;
     return power * std::max(cos_p, 1e-9) * std::max(cos_i, 1e-9) * (inv_dist * inv_dist);
 }
 
@@ -127,9 +129,13 @@ float round_up(double v) {
 
 }  // namespace
 
-double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n) const {
-    return importance_of(centre, std::sqrt(radius2), power, axis, cos_theta_o, sin_theta_o,
-                         cos_theta_e, two_sided, x, n);
+// A region's bound (grow > 0): the directions from a light within the
+// bounding sphere toward a point within `grow` of x are those from the
+// sphere grown by `grow` toward x itself, so the grown sphere seen from x
+// bounds them all.
+double LightSelector::Bounds::importance(const Vec3& x, const Vec3& n, double grow) const {
+    return importance_of(centre, std::sqrt(radius2) + grow, power, axis, cos_theta_o,
+                         sin_theta_o, cos_theta_e, two_sided, x, n, !(grow > 0));
 }
 
 LightSelector::PackedBounds::PackedBounds(const Bounds& b) {
@@ -152,10 +158,11 @@ LightSelector::PackedBounds::PackedBounds(const Bounds& b) {
     two_sided = b.two_sided;
 }
 
-double LightSelector::PackedBounds::importance(const Vec3& x, const Vec3& n) const {
-    return importance_of(Vec3(centre[0], centre[1], centre[2]), radius, power,
+double LightSelector::PackedBounds::importance(const Vec3& x, const Vec3& n,
+                                               double grow) const {
+    return importance_of(Vec3(centre[0], centre[1], centre[2]), double(radius) + grow, power,
                          Vec3(axis[0], axis[1], axis[2]), cos_theta_o, sin_theta_o,
-                         cos_theta_e, two_sided, x, n);
+                         cos_theta_e, two_sided, x, n, !(grow > 0));
 }
 
 std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
@@ -371,9 +378,12 @@ F4 min4(F4 a, F4 b) { return a < b ? a : b; }
 // cull allowances of 1e-4 (float's rounding of the cosines is ~1e-7), and a
 // value that reaches kept at least FLT_MIN, so that underflow never tells a
 // reaching light from one that cannot reach.
-void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n,
+void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, double grow,
                                          float out[kWidth]) const {
-    const F4 power4 = load(power), r = load(radius), r2 = r * r;
+    // A region (grow > 0): bounds grown by its radius, no horizon cull.
+    const bool horizon = !(grow > 0);
+    const F4 power4 = load(power), r = load(radius) + (horizon ? 0.0f : round_up(grow)),
+             r2 = r * r;
     // x − centre in double, then rounded: x itself in float could be off by
     // more than a small light's radius far from the origin.
     F4 dx, dy, dz;
@@ -400,16 +410,17 @@ void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n,
     const F4 cos_i = cos_n >= cos_b ? splat(1) : cos_n * cos_b + sin_n * sin_b;
     F4 value = power4 * max4(cos_p, splat(1e-9)) * max4(cos_i, splat(1e-9)) * inv_dist * inv_dist;
     value = max4(value, splat(FLT_MIN));
-    value = cos_p < load(cos_theta_e) - 1e-4f || cos_i < -1e-4f ? splat(0) : value;
+    const F4 below = horizon ? splat(-1e-4f) : splat(-INFINITY);
+    value = cos_p < load(cos_theta_e) - 1e-4f || cos_i < below ? splat(0) : value;
     value = dist2 <= r2 ? power4 / max4(r2, splat(FLT_MIN)) : value;  // x among the lights
     value = power4 > 0.0f ? value : splat(0);
     std::memcpy(out, &value, sizeof value);
 }
 
-void LightSelector::child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
+void LightSelector::child_probabilities(const WideNode& node, const Receiver& at,
                                         double p[kWidth]) const {
     float importance[kWidth];
-    node.importance(x, n, importance);
+    node.importance(at.x, at.n, at.radius, importance);
     double total = 0;
     for (int i = 0; i < node.count; ++i) total += p[i] = double(importance[i]);
     if (!(total > 0)) {
@@ -421,14 +432,16 @@ void LightSelector::child_probabilities(const WideNode& node, const Vec3& x, con
     for (int i = 0; i < node.count; ++i) p[i] /= total;
 }
 
-void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
+void LightSelector::focus(Memo& memo, const Receiver& at) const {
+    const Vec3 &x = at.x, &n = at.n;
     if (memo.owner != this || memo.slots.empty()) {
         memo.owner = this;
         memo.slots.assign(Memo::kSlots, Memo::Entry{});
         memo.stamp = 0;
     }
     const bool same = memo.stamp > 0 && memo.x.x == x.x && memo.x.y == x.y &&
-                      memo.x.z == x.z && memo.n.x == n.x && memo.n.y == n.y && memo.n.z == n.z;
+                      memo.x.z == x.z && memo.n.x == n.x && memo.n.y == n.y &&
+                      memo.n.z == n.z && memo.radius == at.radius;
     if (same) return;
     if (++memo.stamp == 0) {  // wrapped: forget everything
         std::fill(memo.slots.begin(), memo.slots.end(), Memo::Entry{});
@@ -436,15 +449,15 @@ void LightSelector::focus(Memo& memo, const Vec3& x, const Vec3& n) const {
     }
     memo.x = x;
     memo.n = n;
+    memo.radius = at.radius;
     memo.drawn = ~0u;
-    memo.root_reaches = !wide_.empty() && root_.importance(x, n) > 0;
+    memo.root_reaches = !wide_.empty() && root_.importance(x, n, at.radius) > 0;
 }
 
-const double* LightSelector::child_probabilities(const WideNode& node, const Vec3& x,
-                                                 const Vec3& n, Memo* memo,
-                                                 double scratch[kWidth]) const {
+const double* LightSelector::child_probabilities(const WideNode& node, const Receiver& at,
+                                                 Memo* memo, double scratch[kWidth]) const {
     if (!memo) {
-        child_probabilities(node, x, n, scratch);
+        child_probabilities(node, at, scratch);
         return scratch;
     }
     // The memo is focused on (x, n): sample and pmf call root_reaches first.
@@ -455,24 +468,24 @@ const double* LightSelector::child_probabilities(const WideNode& node, const Vec
     if (e.stamp != memo->stamp || e.node != index) {
         e.node = index;
         e.stamp = memo->stamp;
-        child_probabilities(node, x, n, e.p);
+        child_probabilities(node, at, e.p);
     }
     return e.p;
 }
 
-bool LightSelector::root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const {
+bool LightSelector::root_reaches(const Receiver& at, Memo* memo) const {
     if (wide_.empty()) return false;
-    if (!memo) return root_.importance(x, n) > 0;
-    focus(*memo, x, n);
+    if (!memo) return root_.importance(at.x, at.n, at.radius) > 0;
+    focus(*memo, at);
     return memo->root_reaches;
 }
 
 bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
     if (kind_ != Kind::Tree) return !ids_.empty();
-    return !unbounded_.empty() || root_reaches(x, n, nullptr);
+    return !unbounded_.empty() || root_reaches(Receiver{x, n, 0.0}, nullptr);
 }
 
-std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n, double u,
+std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
                                                    Memo* memo) const {
     if (ids_.empty()) return std::nullopt;
     u = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
@@ -487,7 +500,7 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     }
     // Tree: an unbounded light or the tree (where it reaches), uniformly;
     // then down the tree.
-    const bool tree = root_reaches(x, n, memo);
+    const bool tree = root_reaches(at, memo);
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
     if (choices == 0) return std::nullopt;
     const std::size_t pick = std::min(std::size_t(u * double(choices)), choices - 1);
@@ -497,7 +510,7 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     const WideNode* node = &wide_[0];
     double scratch[kWidth];
     for (;;) {
-        const double* p = child_probabilities(*node, x, n, memo, scratch);
+        const double* p = child_probabilities(*node, at, memo, scratch);
         // The child whose share of [0, 1) holds u; rounding past the last
         // share falls to the last child that has one.
         int i = 0;
@@ -515,14 +528,13 @@ std::optional<SelectedLight> LightSelector::sample(const Vec3& x, const Vec3& n,
     }
 }
 
-double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
-                          Memo* memo) const {
+double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) const {
     if (light >= per_light_.size()) return 0;
     const PerLight& l = per_light_[light];
     if (l.role == PerLight::Absent) return 0;
     if (kind_ == Kind::Uniform) return 1.0 / double(ids_.size());
     if (kind_ == Kind::Power) return l.probability;
-    const bool tree = root_reaches(x, n, memo);
+    const bool tree = root_reaches(at, memo);
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
     if (l.role == PerLight::Unbounded) return 1.0 / double(choices);
     if (!tree) return 0;
@@ -533,7 +545,7 @@ double LightSelector::pmf(const Vec3& x, const Vec3& n, std::uint32_t light,
     for (int level = 0; pmf > 0; ++level) {
         const int i = int((l.trail >> (2 * level)) & 3);
         if (i >= node->count) return 0;  // a light of zero power: not in the tree
-        pmf *= child_probabilities(*node, x, n, memo, scratch)[i];
+        pmf *= child_probabilities(*node, at, memo, scratch)[i];
         if (node->is_leaf & (1u << i)) return node->index[i] == light ? pmf : 0.0;
         node = &wide_[node->index[i]];
     }

@@ -48,6 +48,19 @@ public:
     // False only where no light can reach (x, n) (tree: by its bounds; the
     // others do not know and say true).
     bool may_reach(const Vec3& x, const Vec3& n) const;
+
+    // Where lights are drawn: a point (x, n), or with radius > 0 a region —
+    // every point within `radius` of x, whatever its normal (a texel's
+    // footprint; n then only weighs). A region's pmfs belong to no single
+    // point: the tree's bounds are grown by the radius and not culled by
+    // the horizon, so they are positive for every light that may reach any
+    // point inside. A technique may therefore draw with them at any point
+    // inside the region and stay unbiased (its density there is what pmf()
+    // of the region gives), and a memo keeps them for all of its samples.
+    struct Receiver {
+        Vec3 x, n;
+        double radius = 0;
+    };
     // Scratch memory of one thread that remembers the tree's branching
     // probabilities at one (x, n): the draw and the pmfs evaluated at the
     // same point then share the work near the root. A small direct-mapped
@@ -58,6 +71,7 @@ public:
         static constexpr std::size_t kSlots = 2048;  // a power of 2
         const LightSelector* owner = nullptr;  // one memo per selector
         Vec3 x, n;
+        double radius = 0;
         std::uint32_t stamp = 0;
         bool root_reaches = false;  // at (x, n)
         // The last light drawn from the tree at (x, n), whose pmf the
@@ -73,10 +87,16 @@ public:
     // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
     // (tree only: every bound says so).
     std::optional<SelectedLight> sample(const Vec3& x, const Vec3& n, double u,
-                                        Memo* memo = nullptr) const;
+                                        Memo* memo = nullptr) const {
+        return sample(Receiver{x, n, 0.0}, u, memo);
+    }
+    std::optional<SelectedLight> sample(const Receiver& at, double u, Memo* memo = nullptr) const;
     // The probability that sample() at (x, n) returns `light` (0 for a light
     // not in the selection).
-    double pmf(const Vec3& x, const Vec3& n, std::uint32_t light, Memo* memo = nullptr) const;
+    double pmf(const Vec3& x, const Vec3& n, std::uint32_t light, Memo* memo = nullptr) const {
+        return pmf(Receiver{x, n, 0.0}, light, memo);
+    }
+    double pmf(const Receiver& at, std::uint32_t light, Memo* memo = nullptr) const;
 
     // What the tree bounds: an axis-aligned box, the power inside, and the
     // cone of emission directions (axis, half-angle θo, plus θe, how far past
@@ -94,8 +114,9 @@ public:
         void finish();
 
         // Upper estimate of the light's contribution at (x, n); 0 only where
-        // no light inside can reach (x, n).
-        double importance(const Vec3& x, const Vec3& n) const;
+        // no light inside can reach (x, n). With grow > 0, of a region
+        // (Receiver): 0 only where no light inside reaches any of it.
+        double importance(const Vec3& x, const Vec3& n, double grow = 0) const;
     };
     // The bounds of one light; empty for unbounded lights (sun, world).
     static std::optional<Bounds> bounds_of(const Light& light, double scene_radius);
@@ -109,7 +130,7 @@ private:
         bool two_sided = false;
         PackedBounds() = default;
         explicit PackedBounds(const Bounds& b);
-        double importance(const Vec3& x, const Vec3& n) const;
+        double importance(const Vec3& x, const Vec3& n, double grow) const;
     };
     // The binary tree as built (then collapsed into wide nodes).
     struct Node {
@@ -139,23 +160,22 @@ private:
         void set(int i, const PackedBounds& b);
         // PackedBounds::importance of each child in single precision (0 past
         // count, and never 0 where a child's bounds reach (x, n)).
-        void importance(const Vec3& x, const Vec3& n, float out[kWidth]) const;
+        void importance(const Vec3& x, const Vec3& n, double grow, float out[kWidth]) const;
     };
     std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
     // The probability of each child of a wide node: ∝ the children's
     // importance, or ∝ their power where none's bounds reach (x, n) although
     // the parent's did, so that every draw ends at a light and the pmfs sum
     // to 1.
-    void child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
-                             double p[kWidth]) const;
-    // The same through a memo focused on (x, n) (root_reaches does so).
-    const double* child_probabilities(const WideNode& node, const Vec3& x, const Vec3& n,
-                                      Memo* memo, double scratch[kWidth]) const;
-    // Whether the root's bounds reach (x, n): the tree then takes its share.
-    // Focuses the memo on (x, n).
-    bool root_reaches(const Vec3& x, const Vec3& n, Memo* memo) const;
-    // Sets the memo to (x, n), forgetting other points.
-    void focus(Memo& memo, const Vec3& x, const Vec3& n) const;
+    void child_probabilities(const WideNode& node, const Receiver& at, double p[kWidth]) const;
+    // The same through a memo focused on `at` (root_reaches does so).
+    const double* child_probabilities(const WideNode& node, const Receiver& at, Memo* memo,
+                                      double scratch[kWidth]) const;
+    // Whether the root's bounds reach `at`: the tree then takes its share.
+    // Focuses the memo on it.
+    bool root_reaches(const Receiver& at, Memo* memo) const;
+    // Sets the memo to `at`, forgetting other receivers.
+    void focus(Memo& memo, const Receiver& at) const;
 
     Kind kind_ = Kind::Uniform;
     std::vector<std::uint32_t> ids_;

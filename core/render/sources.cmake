@@ -6,5 +6,6 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/direct_lighting.cpp
     ${CMAKE_CURRENT_LIST_DIR}/receiver.cpp
     ${CMAKE_CURRENT_LIST_DIR}/light_selection.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/texel_tables.cpp
 )
 target_link_libraries(omis_core PUBLIC TBB::tbb)

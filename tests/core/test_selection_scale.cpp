@@ -62,11 +62,11 @@ std::vector<std::uint32_t> all_ids(std::size_t n) {
 
 // p-value of Pearson's chi-square of N draws against the pmfs (the shared
 // checker's: lights expected < 5 times pooled); a light of pmf 0 is never drawn.
-double draws_pvalue(const LightSelector& s, const Vec3& x, const Vec3& n,
+double draws_pvalue(const LightSelector& s, const LightSelector::Receiver& at,
                     const std::vector<double>& pmf, int N, Pcg32& rng) {
     std::vector<double> count(pmf.size()), expected(pmf.size());
     for (int i = 0; i < N; ++i) {
-        const auto pick = s.sample(x, n, rng.next_double());
+        const auto pick = s.sample(at, rng.next_double());
         REQUIRE(pick);  // every draw ends at a light
         REQUIRE(pick->pmf == Approx(pmf[pick->light]).epsilon(1e-12));
         count[pick->light] += 1;
@@ -111,7 +111,7 @@ TEST_CASE("light tree pmfs sum to 1 and match drawing frequencies among many lig
                 // At significance kAlpha (a fixed-seed false alarm below
                 // 1e-4), 200k draws fail a pmf that is off by a few per cent
                 // on the lights drawn a few hundred times.
-                CHECK(draws_pvalue(s, x, n, pmf, 200000, rng) > testing::kAlpha);
+                CHECK(draws_pvalue(s, {x, n, 0.0}, pmf, 200000, rng) > testing::kAlpha);
                 ++checked_draws;
             }
         }
@@ -155,4 +155,49 @@ TEST_CASE("the light tree keeps every reaching light of a tiny cluster far from 
         if (s.may_reach(x, n)) CHECK(total == Approx(1.0).epsilon(1e-12));
     }
     CHECK(reaching > 1000);
+}
+
+TEST_CASE("a region's tree pmfs sum to 1, match draws, and keep every light that reaches "
+          "any point inside", "[selection]") {
+    // A texel's samples draw with its region's pmfs (direct_lighting.cpp):
+    // unbiased only if every light that reaches some point of the region,
+    // whatever its normal there, keeps a share.
+    const std::vector<Light> lights = scattered_lights(3000, false);
+    const LightSelector s(LightSelector::Kind::Tree, lights, all_ids(lights.size()), 10.0);
+    Pcg32 rng(17, 2);
+    int regions = 0, reaching = 0, checked_draws = 0;
+    for (int r = 0; r < 60; ++r) {
+        const Vec3 x(6 * rng.next_double() - 3, 6 * rng.next_double() - 3,
+                     6 * rng.next_double() - 3);
+        const LightSelector::Receiver region{x, random_direction(rng),
+                                             std::pow(10.0, -2.5 + 2 * rng.next_double())};
+        LightSelector::Memo memo;
+        std::vector<double> pmf(lights.size());
+        double total = 0;
+        for (std::uint32_t l = 0; l < lights.size(); ++l)
+            total += pmf[l] = s.pmf(region, l, &memo);
+        INFO("region " << r << " radius " << region.radius);
+        if (total == 0) continue;
+        ++regions;
+        CHECK(total == Approx(1.0).epsilon(1e-12));
+        if (r % 20 == 0) {
+            CHECK(draws_pvalue(s, region, pmf, 200000, rng) > testing::kAlpha);
+            ++checked_draws;
+        }
+        // Points inside the ball (some on its sphere), with any normal.
+        for (int p = 0; p < 20; ++p) {
+            const double t = p < 5 ? 1.0 : std::cbrt(rng.next_double());
+            const Vec3 y = x + random_direction(rng) * (t * region.radius);
+            const Vec3 n = random_direction(rng);
+            for (std::uint32_t l = 0; l < lights.size(); ++l) {
+                if (!(unoccluded_irradiance(lights[l], y, n) > 0)) continue;
+                ++reaching;
+                INFO("point " << p << " light " << l);
+                CHECK(pmf[l] > 0);
+            }
+        }
+    }
+    CHECK(regions > 40);
+    CHECK(reaching > 10000);
+    CHECK(checked_draws >= 2);
 }

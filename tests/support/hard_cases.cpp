@@ -1,8 +1,10 @@
 #include "support/hard_cases.h"
 
 #include <algorithm>
+#include <ctime>
 #include <cmath>
 
+#include "mis/allocation.h"
 #include "render/direct_lighting.h"
 #include "render/techniques.h"
 
@@ -131,6 +133,84 @@ std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, St
     direct_lighting(scene, points.data(), normals.data(), count, s, value.data(),
                     variance.data());
     return value;
+}
+
+namespace {
+
+// Rounds of the allocated call: the fewest settings rounds per allocated round
+// that hold at least 8 samples, 4 a technique, and divide the rounds left (as
+// the baker; here one sample per technique a round).
+int allocated_rounds(int rounds_left, int per_round) {
+    const int least = std::max(8, 4 * per_round);
+    for (int g = 1; g <= rounds_left; ++g)
+        if (rounds_left % g == 0 && g * per_round >= least) return rounds_left / g;
+    return 1;
+}
+
+}  // namespace
+
+AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strategy strategy,
+                           int spp, int pilot_rounds, int copies, std::uint64_t seed,
+                           bool choose, double floor) {
+    DirectLightingSettings s;
+    for (const auto& name : hard_case.techniques) s.techniques.push_back(*parse_technique(name));
+    const int T = int(s.techniques.size());
+    s.samples.assign(T, 1);
+    s.rounds = spp;
+    s.strategy = strategy;
+    s.seed = seed;
+    const LightingContext context(scene, s);
+    PointLighting shader(context);
+    const int points = int(hard_case.points.size());
+    AllocatedRun out;
+    out.values.assign(std::size_t(points) * copies * 3, 0.0);
+    out.shares.assign(T, 0.0);
+    // CPU time of this thread: the shared machine's load does not enter it.
+    auto cpu_seconds = [] {
+        timespec t;
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+        return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+    };
+    const double start = cpu_seconds();
+    for (int k = 0; k < copies; ++k) {
+        auto shade = [&](int p, int first, int rounds, const int* counts,
+                         const std::vector<DrawnRounds>* earlier, double* value) {
+            const Vec3 &x = hard_case.points[p], &n = hard_case.normals[p];
+            shader.shade(std::uint64_t(p) * copies + k, first, rounds, SurfacePoint{x, n, n},
+                         nullptr, value, nullptr, counts, nullptr, nullptr, earlier);
+        };
+        if (pilot_rounds <= 0 || pilot_rounds >= spp) {
+            for (int p = 0; p < points; ++p)
+                shade(p, 0, spp, nullptr, nullptr, &out.values[(std::size_t(p) * copies + k) * 3]);
+            continue;
+        }
+        AllocationPilot pilot(T, 1, s.samples);
+        std::vector<double> first(std::size_t(points) * 3);
+        shader.record_into(&pilot);
+        for (int p = 0; p < points; ++p) {
+            double* v = &first[std::size_t(p) * 3];
+            shade(p, 0, pilot_rounds, nullptr, nullptr, v);
+            const double y = luminance(Vec3(v[0], v[1], v[2]));
+            pilot.end_point(y > 0 ? 1 / y : 0.0, pilot_rounds);
+        }
+        shader.record_into(nullptr);
+        const std::vector<double> shares =
+            choose ? optimal_shares(pilot, pilot.cost(), floor) : std::vector<double>(T, 1.0 / T);
+        for (int t = 0; t < T; ++t) out.shares[t] += shares[t] / copies;
+        const int left = spp - pilot_rounds;
+        const int rounds = allocated_rounds(left, T);
+        const std::vector<int> counts = counts_from_shares(shares, left * T / rounds);
+        const std::vector<DrawnRounds> earlier = {{0, pilot_rounds, nullptr}};
+        const double w = double(pilot_rounds) / spp;
+        for (int p = 0; p < points; ++p) {
+            double second[3];
+            shade(p, pilot_rounds, rounds, counts.data(), &earlier, second);
+            double* v = &out.values[(std::size_t(p) * copies + k) * 3];
+            for (int c = 0; c < 3; ++c) v[c] = w * first[std::size_t(p) * 3 + c] + (1 - w) * second[c];
+        }
+    }
+    out.seconds = cpu_seconds() - start;
+    return out;
 }
 
 std::vector<double> reference(const Scene& scene, const HardCase& hard_case, int rounds,

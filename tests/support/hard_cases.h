@@ -35,6 +35,26 @@ std::vector<double> run_counts(const Scene& scene, const HardCase& hard_case, St
                                const std::vector<int>& counts, int rounds, int copies,
                                std::uint64_t seed);
 
+// Sample allocation (issue 10, item 2) as a bake does it, with the copy's 8
+// points as the tile: `pilot_rounds` rounds of one sample per technique
+// recorded into one pilot (each point's integrand scaled by 1/its estimate),
+// shares from it (mis/allocation.h, floor `floor`), then the remaining
+// spp − pilot_rounds rounds' samples in rounds of at least 8 (4 a technique)
+// split by those shares; a point's value is the two calls' sample-weighted mean.
+// pilot_rounds = 0: one call of spp rounds of one sample each (fixed counts).
+// Serial; seconds: the shading's CPU time (the pilot's choice included). Same streams and
+// layout as run().
+struct AllocatedRun {
+    std::vector<double> values;
+    std::vector<double> shares;  // mean over copies
+    double seconds = 0;
+};
+// choose = false: the same two calls, the later one keeping one sample per
+// technique and round (what the allocation's choice is measured against).
+AllocatedRun run_allocated(const Scene& scene, const HardCase& hard_case, Strategy strategy,
+                           int spp, int pilot_rounds, int copies, std::uint64_t seed,
+                           bool choose = true, double floor = 0.05);
+
 // Per point and channel, the mean of `copies` balance runs of `rounds` rounds:
 // the reference the errors are measured against.
 std::vector<double> reference(const Scene& scene, const HardCase& hard_case, int rounds,

@@ -1,0 +1,124 @@
+// Texel tables kept from pass to pass (render/texel_tables.h): a bake's later
+// pass must shade a texel exactly as if it had worked out the texel's
+// techniques and light tables anew, and the store must keep to its budget.
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <vector>
+
+#include "render/direct_lighting.h"
+
+using namespace omis;
+
+namespace {
+
+// A square of the floor z = 0 around `centre`, as a texel's footprint.
+class SquareFootprint : public Footprint {
+public:
+    SquareFootprint(const Vec3& centre, double half) : centre_(centre), half_(half) {}
+    SurfacePoint at(double u, double v) const override {
+        const Vec3 x = centre_ + Vec3((2 * u - 1) * half_, (2 * v - 1) * half_, 0);
+        return SurfacePoint{x, Vec3(0, 0, 1), Vec3(0, 0, 1)};
+    }
+    SurfacePoint centre() const { return at(0.5, 0.5); }
+
+private:
+    Vec3 centre_;
+    double half_;
+};
+
+// area_round's lights and more: a spread disk, a plain ellipse, a spread
+// rect whose reach ends inside the floor, above a 4 m floor.
+void add_spread_scene(Scene& scene) {
+    scene.add_mesh({{-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}}, {{0, 1, 2}, {0, 2, 3}});
+    const Vec3 down_a = normalize(Vec3(0, 1, -0.5)) * 0.3, side = Vec3(0.3, 0, 0);
+    scene.add_light(make_ellipse_light(Vec3(0, -0.4, 0.7), down_a, side, Vec3(4, 4, 4), false,
+                                       2.1));
+    scene.add_light(make_ellipse_light(Vec3(0.3, 0.5, 0.5), Vec3(0, 0.15, 0), Vec3(0.3, 0, 0),
+                                       Vec3(3, 2, 1), false, kPi));
+    scene.add_light(make_rect_light(Vec3(-0.9, 0.2, 0.4), Vec3(0, 0.4, 0), Vec3(0.4, 0, 0),
+                                    Vec3(5, 5, 5), false, 0.6));
+    scene.commit();
+}
+
+DirectLightingSettings settings_with(Strategy strategy) {
+    DirectLightingSettings s;
+    for (const char* name : {"unoccluded/solid-angle", "power/solid-angle", "bsdf"})
+        s.techniques.push_back(*parse_technique(name));
+    s.samples = {1, 1, 1};
+    s.strategy = strategy;
+    s.seed = 11;
+    return s;
+}
+
+bool same_bits(const double* a, const double* b) { return std::memcmp(a, b, 3 * sizeof(double)) == 0; }
+
+}  // namespace
+
+TEST_CASE("texel tables: a later pass from kept tables equals one that works them out",
+          "[texel_tables]") {
+    Scene scene;
+    add_spread_scene(scene);
+    // Texels under each light, at the rim of the spread rect's reach, and
+    // where no light reaches the centre but some reach a corner.
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, -0.4, 0), 0.02},   {Vec3(0.3, 0.5, 0), 0.02}, {Vec3(-0.7, 0.4, 0), 0.02},
+        {Vec3(-0.3, 0.9, 0), 0.05}, {Vec3(1.5, -1.5, 0), 0.1}, {Vec3(-1.9, 1.9, 0), 0.08},
+    };
+    for (Strategy strategy : {Strategy::Balance, Strategy::OptimalDirect}) {
+        const DirectLightingSettings s = settings_with(strategy);
+        LightingContext kept(scene, s), fresh(scene, s);
+        PointLighting passes(kept), once(fresh);
+        for (std::size_t t = 0; t < texels.size(); ++t) {
+            const SquareFootprint& f = texels[t];
+            double first[3], later[3], later_var[3], direct[3], direct_var[3];
+            passes.shade(t, 0, 1, f.centre(), &f, first, nullptr);  // keeps its tables
+            passes.shade(t, 1, 6, f.centre(), &f, later, later_var);  // takes them back
+            once.shade(t, 1, 6, f.centre(), &f, direct, direct_var);  // works them out
+            INFO("texel " << t << ", strategy " << int(strategy));
+            CHECK(same_bits(later, direct));
+            CHECK(same_bits(later_var, direct_var));
+        }
+        CHECK(kept.texel_tables.size() == texels.size());
+    }
+}
+
+TEST_CASE("texel tables: points without a footprint keep nothing at their first pass",
+          "[texel_tables]") {
+    Scene scene;
+    add_spread_scene(scene);
+    const LightingContext context(scene, settings_with(Strategy::Balance));
+    PointLighting shader(context);
+    double v[3];
+    shader.shade(0, 0, 2, Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(0, 0, 1), v, nullptr);
+    CHECK(context.texel_tables.size() == 0);  // direct_lighting: one call per point
+    shader.shade(0, 2, 2, Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(0, 0, 1), v, nullptr);
+    CHECK(context.texel_tables.size() == 1);  // a bake's vertex, at its second pass
+}
+
+TEST_CASE("texel tables: the store keeps to its byte budget", "[texel_tables]") {
+    auto entry = [] {
+        TexelTables::Entry e;
+        e.mask = 3;
+        e.tables.push_back({0, {0, 1, 2}, {0.5, 0.25, 0.25}});
+        return e;
+    };
+    TexelTables probe;
+    probe.keep(0, entry());
+    const std::size_t one = probe.bytes();
+    REQUIRE(one > 0);
+
+    TexelTables store(3 * one);
+    for (std::uint64_t t = 0; t < 5; ++t) store.keep(t, entry());
+    CHECK(store.size() == 3);
+    CHECK(store.bytes() == 3 * one);
+    REQUIRE(store.find(1) != nullptr);
+    CHECK(store.find(1)->tables[0].probability[1] == 0.25);
+    CHECK(store.find(4) == nullptr);  // past the budget: recomputed instead
+
+    TexelTables again(10 * one);
+    again.keep(7, entry());
+    again.keep(7, entry());  // kept already: neither replaced nor counted twice
+    CHECK(again.size() == 1);
+    CHECK(again.bytes() == one);
+}
