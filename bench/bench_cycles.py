@@ -2,7 +2,7 @@
 
     bash scripts/blender_run.sh bench/bench_cycles.py [--out DIR] [--quick]
         [--scenes a,b,...] [--budgets 0.05,0.1,0.25,0.5,1,2] [--ref-seconds S] [--size N]
-        [--techniques bsdf,uniform/solid-angle,...]
+        [--techniques bsdf,uniform/solid-angle,...] [--equal-samples]
 
 Scenes: every scene of the Cycles-agreement suite (tests/blender/cycles_scenes.py
 SCENES, read at start-up; EXCLUDED lists those where omis and Cycles differ by
@@ -217,7 +217,10 @@ def run_scene(name, args):
                          bake_seconds=t, samples_per_texel=spp, rel_mse=ref_c.rel_mse(x),
                          ref_floor=ref_c.floor()))
         for strategy, label in (("balance", "omis balance"), ("optimal-direct", "omis optimal")):
-            x, t, s, _ = omis_run(objects, image, strategy, 20 + i, seconds=budget)
+            if args.equal_samples:  # Cycles' sample count, no time limit
+                x, t, s, _ = omis_run(objects, image, strategy, 20 + i, samples=spp)
+            else:
+                x, t, s, _ = omis_run(objects, image, strategy, 20 + i, seconds=budget)
             rows.append(dict(scene=name, strategy=label, budget=budget, seconds=t,
                              bake_seconds=s["bake_seconds"],
                              samples_per_texel=s["samples_per_texel"],
@@ -231,9 +234,10 @@ def run_scene(name, args):
     return rows, summary
 
 
-def cycles_at(rows, scene, seconds):
-    """Cycles' relMSE at a given time: power-law fit through its points (log-log)."""
-    pts = [(r["seconds"], r["rel_mse"]) for r in rows
+def cycles_at(rows, scene, seconds, key="seconds"):
+    """Cycles' relMSE at a given time (or, key="samples_per_texel", at a given
+    sample count): power-law fit through its points (log-log)."""
+    pts = [(r[key], r["rel_mse"]) for r in rows
            if r["scene"] == scene and r["strategy"] == "cycles" and r["rel_mse"] > 0]
     t = np.log([p[0] for p in pts])
     e = np.log([p[1] for p in pts])
@@ -243,8 +247,8 @@ def cycles_at(rows, scene, seconds):
 
 def table(rows, summaries, budgets):
     lines = [f"{'scene':<15} {'budget':>6} {'strategy':<13} {'time (s)':>8} {'spp':>7} "
-             f"{'relMSE':>9} {'/Cycles':>8}"]
-    ratios = {}
+             f"{'relMSE':>9} {'/Cycles':>8} {'/C@spp':>7}"]
+    ratios, per_sample = {}, {}
     for s in summaries:
         scene = s["scene"]
         for budget in budgets:
@@ -252,24 +256,32 @@ def table(rows, summaries, budgets):
                 if r["scene"] != scene or r["budget"] != budget:
                     continue
                 ratio = r["rel_mse"] / cycles_at(rows, scene, r["seconds"])
-                r["ratio_vs_cycles"] = ratio
+                # Error per sample: against Cycles at omis' own sample count
+                # (one Cycles sample is a light sample and a BSDF sample).
+                at_spp = r["rel_mse"] / cycles_at(rows, scene, r["samples_per_texel"],
+                                                   key="samples_per_texel")
+                r["ratio_vs_cycles"], r["ratio_at_spp"] = ratio, at_spp
                 if r["strategy"] != "cycles":
                     ratios.setdefault((scene, r["strategy"]), []).append(ratio)
+                    per_sample.setdefault((scene, r["strategy"]), []).append(at_spp)
+                own = r["strategy"] == "cycles"
                 lines.append(f"{scene:<15} {budget:>6g} {r['strategy']:<13} {r['seconds']:>8.2f} "
                              f"{r['samples_per_texel']:>7.0f} {r['rel_mse']:>9.2e} "
-                             f"{ratio if r['strategy'] != 'cycles' else 1.0:>8.2f}")
+                             f"{1.0 if own else ratio:>8.2f} {1.0 if own else at_spp:>7.2f}")
     lines.append("")
     lines.append("relMSE of omis / relMSE of Cycles at equal wall time (geometric mean over the "
                  "budgets; Cycles interpolated by a power-law fit; goal: optimal ≤ 0.5)")
-    lines.append(f"{'scene':<15} {'balance':>8} {'optimal':>8} {'goal':>5}  "
+    lines.append("(@spp: optimal's relMSE / Cycles' at the same samples per texel, geometric mean)")
+    lines.append(f"{'scene':<15} {'balance':>8} {'optimal':>8} {'goal':>5}  {'@spp':>6} "
                  f"{'Cycles t0 (s)':>13} {'ms/spp':>7} {'refs: bias':>10} {'agree':>6}")
     for s in summaries:
         scene = s["scene"]
         b = float(np.exp(np.mean(np.log(ratios[(scene, "omis balance")]))))
         o = float(np.exp(np.mean(np.log(ratios[(scene, "omis optimal")]))))
-        s["ratio_balance"], s["ratio_optimal"] = b, o
+        q = float(np.exp(np.mean(np.log(per_sample[(scene, "omis optimal")]))))
+        s["ratio_balance"], s["ratio_optimal"], s["ratio_optimal_at_spp"] = b, o, q
         lines.append(f"{scene:<15} {b:>8.2f} {o:>8.2f} {'met' if o <= 0.5 else 'MISS':>5}  "
-                     f"{s['t0']:>13.3f} {1e3 * s['k']:>7.2f} {100 * s['ref_bias']:>+9.2f}% "
+                     f"{q:>6.2f} {s['t0']:>13.3f} {1e3 * s['k']:>7.2f} {100 * s['ref_bias']:>+9.2f}% "
                      f"{100 * s['ref_agree']:>5.1f}%")
     return "\n".join(lines)
 
@@ -328,6 +340,9 @@ def main():
     parser.add_argument("--techniques", default=None,
                         help="comma-separated technique names (SPEC §3) for omis instead "
                              "of the effect plan's choice, e.g. uniform/solid-angle,bsdf")
+    parser.add_argument("--equal-samples", action="store_true",
+                        help="omis takes Cycles' samples per texel at each budget instead of "
+                             "the time budget (error per sample; read the @spp column)")
     args = parser.parse_args(script_args())
     if args.techniques:
         global TECHNIQUES_OVERRIDE
@@ -368,7 +383,8 @@ def main():
         f.write(text + "\n")
     with open(os.path.join(out, "bench_cycles.csv"), "w", newline="") as f:
         fields = ["scene", "strategy", "budget", "seconds", "bake_seconds",
-                  "samples_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles"]
+                  "samples_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles",
+                  "ratio_at_spp"]
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)

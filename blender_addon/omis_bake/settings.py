@@ -19,6 +19,9 @@ _SELECTIONS = (  # SPEC name, label, tooltip start
      "The lights that light this point most (ignoring shadows) more often"),
     ("tree", "Light Tree", "Lights chosen through a light hierarchy by their likely "
                            "contribution (fast with many lights)"),
+    ("defensive", "Near or Any",
+     "Half the time the lights that light this point most (ignoring shadows), half the "
+     "time any light (defensive mixture)"),
 )
 _SAMPLERS = (  # SPEC name, label, tooltip end
     ("area", "Area", "a point on the light's area"),

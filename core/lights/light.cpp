@@ -542,13 +542,13 @@ std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, co
             const auto r = rect_reaching(l, x);
             if (!r) return std::nullopt;
             if (sampler == ShapeSampler::Area) return r->sample_area(x, u1, u2);
-            if (sampler == ShapeSampler::SolidAngle) return r->sample_solid_angle(x, u1, u2);
+            if (sampler == ShapeSampler::SolidAngle) return r->sample_solid_angle(x, n, u1, u2);
             return r->sample_parallel(x, n, u1, u2);
         }
         case LightType::Triangle:
             if (sampler == ShapeSampler::Area) return l.triangle.sample_area(x, u1, u2);
             if (sampler == ShapeSampler::SolidAngle)
-                return l.triangle.sample_solid_angle(x, u1, u2);
+                return l.triangle.sample_solid_angle(x, n, u1, u2);
             return l.triangle.sample_parallel(x, n, u1, u2);
         case LightType::Ellipse: {
             // Parallel projects the whole ellipse; area and solid angle draw only
@@ -597,12 +597,12 @@ double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3
             const auto r = rect_reaching(l, x);
             if (!r) return 0;
             if (sampler == ShapeSampler::Area) return r->pdf_area(x, w);
-            if (sampler == ShapeSampler::SolidAngle) return r->pdf_solid_angle(x, w);
+            if (sampler == ShapeSampler::SolidAngle) return r->pdf_solid_angle(x, n, w);
             return r->pdf_parallel(x, n, w);
         }
         case LightType::Triangle:
             if (sampler == ShapeSampler::Area) return l.triangle.pdf_area(x, w);
-            if (sampler == ShapeSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, w);
+            if (sampler == ShapeSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, n, w);
             return l.triangle.pdf_parallel(x, n, w);
         case LightType::Ellipse: {
             if (sampler == ShapeSampler::Parallel) return l.ellipse.pdf_parallel(x, n, w);

@@ -178,6 +178,7 @@ struct PointLighting::Impl {
     // centre and corners), so a light that reaches part of a texel keeps its
     // share wherever in the texel it was probed.
     bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
+    void mix_in_uniform(int k, const SurfacePoint* probes, int n_probes);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
@@ -198,12 +199,13 @@ struct PointLighting::Impl {
     // very many lights, where the table would not pay.
     struct SolidAngleCache {
         std::uint64_t point = ~0ull;
-        std::optional<SphericalRect> rect;
-        std::optional<SphericalTriangle> triangle;
+        Vec3 n;  // the receiver normal the warp was made for
+        std::optional<CosineWarped<SphericalRect>> rect;
+        std::optional<CosineWarped<SphericalTriangle>> triangle;
         std::optional<SphericalEllipse> ellipse;
     };
     static constexpr std::size_t kMaxCachedLights = 1024;
-    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x);
+    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x, const Vec3& n);
     bool solid_angle_ready(std::uint32_t l) const {
         return l < solid_angle_cache_.size() && solid_angle_cache_[l].point == point_serial_;
     }
@@ -255,7 +257,8 @@ struct PointLighting::Impl {
 };
 
 const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std::uint32_t l,
-                                                                             const Vec3& x) {
+                                                                             const Vec3& x,
+                                                                             const Vec3& n) {
     const Light& light = p_.scene.lights()[l];
     if (light.type != LightType::Rect && light.type != LightType::Triangle &&
         !ellipse_wholly_reaches(light, x))
@@ -264,17 +267,25 @@ const PointLighting::Impl::SolidAngleCache* PointLighting::Impl::solid_angle(std
     if (solid_angle_cache_.size() != p_.scene.lights().size())
         solid_angle_cache_.resize(p_.scene.lights().size());
     SolidAngleCache& c = solid_angle_cache_[l];
-    if (c.point != point_serial_) {
+    if (c.point != point_serial_ || c.n.x != n.x || c.n.y != n.y || c.n.z != n.z) {
         c.point = point_serial_;
+        c.n = n;
+        // RectLight/TriangleLight::sample_solid_angle(x, n, …)'s shape, prepared.
+        c.rect.reset();
+        c.triangle.reset();
+        c.ellipse.reset();
         if (light.type == LightType::Rect) {
             const auto r = rect_reaching(light, x);  // spread: only the part that reaches x
-            c.rect = r ? SphericalRect::make(x, r->corner, r->edge_u, r->edge_v) : std::nullopt;
+            const auto s = r ? SphericalRect::make(x, r->corner, r->edge_u, r->edge_v)
+                             : std::nullopt;
+            if (s) c.rect.emplace(*s, n);
         } else if (light.type == LightType::Ellipse) {
             const EllipseLight& e = light.ellipse;
             c.ellipse = SphericalEllipse::make(x, e.center, e.axis_a, e.axis_b);
-        } else
-            c.triangle = SphericalTriangle::make(x, light.triangle.p0, light.triangle.p1,
-                                                 light.triangle.p2);
+        } else if (const auto s = SphericalTriangle::make(x, light.triangle.p0,
+                                                          light.triangle.p1, light.triangle.p2)) {
+            c.triangle.emplace(*s, n);
+        }
     }
     return &c;
 }
@@ -286,7 +297,7 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
     if (sampler == ShapeSampler::SolidAngle && tiny_in_solid_angle(p_.tiny_shapes[l], x))
         sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
-        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
     std::optional<LightSample> s;
     if (!c) s = sample_light(light, sampler, x, n, u1, u2);
     else s = sample_cached(*c, u1, u2);
@@ -297,8 +308,8 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
 std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCache& cache,
                                                               double u1, double u2) {
     // RectLight/TriangleLight::sample_solid_angle's draw, from the prepared shape.
-    if (cache.rect) return uniform_solid_angle_sample(*cache.rect, u1, u2);
-    if (cache.triangle) return uniform_solid_angle_sample(*cache.triangle, u1, u2);
+    if (cache.rect) return warped_solid_angle_sample(*cache.rect, u1, u2);
+    if (cache.triangle) return warped_solid_angle_sample(*cache.triangle, u1, u2);
     if (cache.ellipse) {  // EllipseLight::sample_solid_angle's draw
         const DirSample s = cache.ellipse->sample(u1, u2);
         return LightSample{s.dir, s.dist, cache.ellipse->pdf(s.dir)};
@@ -317,7 +328,7 @@ double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec
         !ray_crosses_light(light, x, w))
         return 0.0;
     const SolidAngleCache* c =
-        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x) : nullptr;
+        sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
     if (!c) return light_pdf(light, sampler, x, n, w);
     if (c->rect) return c->rect->pdf(w);
     if (c->triangle) return c->triangle->pdf(w);
@@ -349,7 +360,8 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
         if (!sampler_applies(light, t.sampler, x, n)) continue;
         double w = 1.0;
         if (t.selection == LightSelection::Power) w = p_.power[l];
-        if (t.selection == LightSelection::Unoccluded) w = unoccluded_irradiance(light, x, n);
+        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
+            w = unoccluded_irradiance(light, x, n);
         c.lights.push_back(l);
         c.probability.push_back(w);
         largest = std::max(largest, w);
@@ -367,6 +379,10 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
         c.cdf.push_back(running);
     }
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
+    if (t.selection == LightSelection::Defensive) {
+        const SurfacePoint point{x, n, n};
+        mix_in_uniform(k, &point, 1);
+    }
     return !c.lights.empty();
 }
 
@@ -387,7 +403,7 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
     c.cdf.clear();
     auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
         if (t.selection == LightSelection::Power) return p_.power[l];
-        if (t.selection == LightSelection::Unoccluded)
+        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
             return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
         return 1.0;
     };
@@ -422,7 +438,35 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
         c.cdf.push_back(running);
     }
     c.cdf.back() = 1.0;
+    if (t.selection == LightSelection::Defensive) mix_in_uniform(k, probes, n_probes);
     return true;
+}
+
+// `defensive` selection: technique k's table (unoccluded probabilities) becomes
+// half that and half uniform over the lights that reach some probe, so a light
+// the unoccluded weights undervalue — one shadowed where it is bright — keeps
+// a fair share of a single technique's samples. Lights reaching no probe keep
+// their tiny share (unbiased wherever the technique is active).
+void PointLighting::Impl::mix_in_uniform(int k, const SurfacePoint* probes, int n_probes) {
+    const Technique& t = p_.settings.techniques[k];
+    LightChoice& c = choices_[k];
+    std::vector<char> reaches(c.lights.size(), 0);
+    int reaching = 0;
+    for (std::size_t i = 0; i < c.lights.size(); ++i) {
+        const Light& light = p_.scene.lights()[c.lights[i]];
+        for (int j = 0; j < n_probes && !reaches[i]; ++j)
+            reaches[i] = sampler_applies(light, t.sampler, probes[j].x, probes[j].n);
+        reaching += reaches[i];
+    }
+    if (reaching == 0) return;
+    double running = 0;
+    for (std::size_t i = 0; i < c.lights.size(); ++i) {
+        c.probability[i] = 0.5 * c.probability[i] + (reaches[i] ? 0.5 / reaching : 0.0);
+        running += c.probability[i];
+        c.cdf[i] = running;
+    }
+    // The probabilities still sum to 1 (up to rounding): the CDF's end is exact.
+    c.cdf.back() = 1.0;
 }
 
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
@@ -1287,7 +1331,8 @@ const LightSelector* LightingContext::selector(LightSelection selection) const {
         case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
         case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
         case LightSelection::Tree: return &tree_selector;
-        case LightSelection::Unoccluded: return nullptr;
+        case LightSelection::Unoccluded:
+        case LightSelection::Defensive: return nullptr;
     }
     return nullptr;
 }

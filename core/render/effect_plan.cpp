@@ -77,7 +77,9 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         if (why.empty() && !t.bsdf && t.selection == LightSelection::Tree)
             why = "applies (light tree: O(log L) selection over " +
                   std::to_string(plan.integrated_lights) + " light(s))";
-        else if (why.empty() && !t.bsdf && t.selection == LightSelection::Unoccluded &&
+        else if (why.empty() && !t.bsdf &&
+                 (t.selection == LightSelection::Unoccluded ||
+                  t.selection == LightSelection::Defensive) &&
                  plan.integrated_lights > kManyIntegratedLights)
             why = "applies (exact per-light weights: cost grows with the " +
                   std::to_string(plan.integrated_lights) + " lights; `tree` does not)";
@@ -149,25 +151,24 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         add("uniform/solid-angle", 1);
     } else if (integrated > kManyIntegratedLights) {
         // Many emitters: the exact unoccluded weights would cost O(L) per
-        // point; the light tree picks by bounds in O(log L).
+        // point; the light tree picks by bounds in O(log L). The world and
+        // emissive meshes are what cosine sampling is good at.
         add("tree/solid-angle", 1);
         add("power/solid-angle", 1);
+        if (world || emissive_meshes) add("bsdf", 1);
     } else {
-        // Several lights: the paper's "trained" technique (selection by
-        // unoccluded contribution) with a power-selected partner that covers
-        // what occlusion hides from it. Against one technique alone in the
-        // Cycles race (relMSE per sample ÷ Cycles', balance, area,
-        // area_round, shared_image, principled_r1, emission_world, demo_room)
-        // the pair scored a geometric mean of 1.25 against 1.77 for uniform;
-        // `unoccluded` alone ignores shadows and starved the demo room's
-        // floor under its table (9× Cycles' error per sample there).
-        add("unoccluded/solid-angle", 1);
-        add("power/solid-angle", 1);
+        // Several lights: one technique again, selecting half by unoccluded
+        // contribution (the paper's "trained" technique) and half uniformly,
+        // so lights that occlusion hides from the unoccluded weights keep
+        // their share (`unoccluded` alone starved the demo room's floor under
+        // its table). One sequence of N samples instead of a pair's two of
+        // N/2: see bench_cycles' error per sample (README, issue 9).
+        add("defensive/solid-angle", 1);
     }
-    // The world, emissive meshes and huge lights are what cosine sampling is
-    // good at (a world alone is already drawn by cosine: `bsdf` would repeat it).
-    const bool world_alone = world && integrated == 1;
-    if ((world && !world_alone) || emissive_meshes || huge) add("bsdf", 1);
+    // Huge lights are what cosine sampling is good at (a world is drawn by
+    // cosine already, by the light techniques).
+    if (huge && (integrated <= kManyIntegratedLights || !(world || emissive_meshes)))
+        add("bsdf", 1);
 }
 
 }  // namespace omis

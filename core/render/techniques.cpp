@@ -13,6 +13,7 @@ constexpr std::pair<LightSelection, const char*> kSelections[] = {
     {LightSelection::Power, "power"},
     {LightSelection::Unoccluded, "unoccluded"},
     {LightSelection::Tree, "tree"},
+    {LightSelection::Defensive, "defensive"},
 };
 constexpr ShapeSampler kSamplers[] = {ShapeSampler::Area, ShapeSampler::SolidAngle,
                                       ShapeSampler::Parallel, ShapeSampler::ProjectedSolidAngle};

@@ -12,8 +12,11 @@ namespace omis {
 
 // Tree: the light hierarchy's estimate of each light's contribution
 // (render/light_selection.h) — cheap at any light count, unlike Unoccluded's
-// exact per-light irradiance.
-enum class LightSelection { Uniform, Power, Unoccluded, Tree };
+// exact per-light irradiance. Defensive: half Unoccluded's probabilities and
+// half uniform over the lights that reach the point (a defensive mixture,
+// Hesterberg 1995): one technique that keeps shadowed lights sampled, where
+// an unoccluded + uniform pair would split the samples over two sequences.
+enum class LightSelection { Uniform, Power, Unoccluded, Tree, Defensive };
 
 struct Technique {
     bool bsdf = false;  // cosine-weighted hemisphere

@@ -105,6 +105,18 @@ double RectLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
     return sr ? sr->pdf(w) : 0.0;
 }
 
+std::optional<LightSample> RectLight::sample_solid_angle(const Vec3& x, const Vec3& n,
+                                                         double u1, double u2) const {
+    const auto sr = SphericalRect::make(x, corner, edge_u, edge_v);
+    if (!sr) return std::nullopt;
+    return warped_solid_angle_sample(CosineWarped(*sr, n), u1, u2);
+}
+
+double RectLight::pdf_solid_angle(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    const auto sr = SphericalRect::make(x, corner, edge_u, edge_v);
+    return sr ? CosineWarped(*sr, n).pdf(w) : 0.0;
+}
+
 std::optional<ParallelPolygon> RectLight::parallel(const Vec3& x, const Vec3& n) const {
     return ParallelPolygon::make(n, corner - x,
                                  {Vec3{}, edge_u, edge_u + edge_v, edge_v});
@@ -173,6 +185,18 @@ std::optional<LightSample> TriangleLight::sample_solid_angle(const Vec3& x, doub
 double TriangleLight::pdf_solid_angle(const Vec3& x, const Vec3& w) const {
     const auto st = SphericalTriangle::make(x, p0, p1, p2);
     return st ? st->pdf(w) : 0.0;
+}
+
+std::optional<LightSample> TriangleLight::sample_solid_angle(const Vec3& x, const Vec3& n,
+                                                             double u1, double u2) const {
+    const auto st = SphericalTriangle::make(x, p0, p1, p2);
+    if (!st) return std::nullopt;
+    return warped_solid_angle_sample(CosineWarped(*st, n), u1, u2);
+}
+
+double TriangleLight::pdf_solid_angle(const Vec3& x, const Vec3& n, const Vec3& w) const {
+    const auto st = SphericalTriangle::make(x, p0, p1, p2);
+    return st ? CosineWarped(*st, n).pdf(w) : 0.0;
 }
 
 std::optional<ParallelPolygon> TriangleLight::parallel(const Vec3& x, const Vec3& n) const {

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "math/vec3.h"
+#include "sampling/cosine_warp.h"
 #include "sampling/ellipse.h"
 #include "sampling/parallel.h"
 #include "sampling/projected.h"
@@ -28,6 +29,15 @@ template <class SphericalShape>
 LightSample uniform_solid_angle_sample(const SphericalShape& shape, double u1, double u2) {
     const DirSample s = shape.sample(u1, u2);
     return LightSample{s.dir, s.dist, 1.0 / shape.solid_angle()};
+}
+
+// A draw of the `solid-angle` sampler: CosineWarped over the prepared shape.
+template <class SphericalShape>
+LightSample warped_solid_angle_sample(const CosineWarped<SphericalShape>& warped, double u1,
+                                      double u2) {
+    double pdf = 0;
+    const DirSample s = warped.sample(u1, u2, pdf);
+    return LightSample{s.dir, s.dist, pdf};
 }
 
 // Ray hit: distance and the shape's own parametrisation of the hit point (used for
@@ -52,6 +62,11 @@ struct RectLight {
     // Uniform over the solid angle (SphericalRect); pdf 1/Ω.
     std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
     double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    // The `solid-angle` sampler at a receiver of normal n: the same, bent toward
+    // cos θ (CosineWarped).
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, const Vec3& n, double u1,
+                                                  double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& n, const Vec3& w) const;
     // Parallel projection; empty / 0 when the light is not wholly above the horizon.
     std::optional<ParallelPolygon> parallel(const Vec3& x, const Vec3& n) const;
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
@@ -77,6 +92,9 @@ struct TriangleLight {
     double pdf_area(const Vec3& x, const Vec3& w) const;
     std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
     double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
+    std::optional<LightSample> sample_solid_angle(const Vec3& x, const Vec3& n, double u1,
+                                                  double u2) const;
+    double pdf_solid_angle(const Vec3& x, const Vec3& n, const Vec3& w) const;
     std::optional<ParallelPolygon> parallel(const Vec3& x, const Vec3& n) const;
     std::optional<LightSample> sample_parallel(const Vec3& x, const Vec3& n, double u1,
                                                double u2) const;

@@ -42,7 +42,16 @@ struct Cone {
 Point2 sample_uniform_triangle(double u1, double u2);
 Point2 invert_uniform_triangle(const Point2& b);
 
-// Uniform over the unit disk (area measure, pdf 1/π), polar map.
+// Piecewise-bilinear density over [0,1)²: g × g patches through the node weights
+// w[j·(g+1) + i] at (i/g, j/g) (all > 0). Drawn by inverting the marginal in y,
+// then x given y — both piecewise linear, inverted in closed form per segment
+// (g = 1 is pbrt-v4's SampleBilinear) — so the map is monotone in each
+// coordinate and keeps a low-discrepancy set's strata.
+Point2 sample_piecewise_bilinear(double u1, double u2, const double* w, int g);
+// Area density of sample_piecewise_bilinear at p.
+double pdf_piecewise_bilinear(const Point2& p, const double* w, int g);
+
+// Uniform over the unit disk (area measure, pdf 1/π), concentric map (Shirley–Chiu).
 Point2 sample_uniform_disk(double u1, double u2);
 Point2 invert_uniform_disk(const Point2& p);
 
