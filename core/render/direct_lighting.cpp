@@ -1411,11 +1411,13 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
             // One stream: the variance as for independent draws, an upper
             // estimate for these stratified ones. Several: the streams'
             // spread (three degrees of freedom with four: noisy per point).
+            // variance may be null: the caller wants values only.
+            double* out = variance ? variance + 3 * i : nullptr;
             const bool spread = settings.streams > 1;
             try {
                 shader.shade(i, 0, settings.rounds, SurfacePoint{x, n, n}, nullptr,
-                             value + 3 * i, spread ? variance + 3 * i : nullptr, nullptr,
-                             spread ? nullptr : variance + 3 * i);
+                             value + 3 * i, spread ? out : nullptr, nullptr,
+                             spread ? nullptr : out);
             } catch (const LightingCancelled&) {
                 return;
             }

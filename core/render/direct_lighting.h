@@ -59,7 +59,8 @@ struct DirectLightingStats {
 using ProgressFunction = std::function<bool(double)>;
 
 // points, normals: count × 3 doubles (normals unit length, facing the side
-// that receives light). value, variance: count × 3 doubles written.
+// that receives light). value, variance: count × 3 doubles written (variance may
+// be null).
 DirectLightingStats direct_lighting(const Scene& scene, const double* points,
                                     const double* normals, std::size_t count,
                                     const DirectLightingSettings& settings, double* value,

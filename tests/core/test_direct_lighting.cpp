@@ -409,6 +409,13 @@ TEST_CASE("same seed, same bits, at any thread count", "[direct]") {
     direct_lighting(scene, pts.data(), nrm.data(), P, s, v2.data(), var2.data());
     CHECK(v1 == v2);
     CHECK(var1 == var2);
+    // Values only (no variance asked): the same values, at one stream and at four.
+    direct_lighting(scene, pts.data(), nrm.data(), P, s, v2.data(), nullptr);
+    CHECK(v1 == v2);
+    s.streams = kMaxSampleStreams;
+    direct_lighting(scene, pts.data(), nrm.data(), P, s, v1.data(), var1.data());
+    direct_lighting(scene, pts.data(), nrm.data(), P, s, v2.data(), nullptr);
+    CHECK(v1 == v2);
     s.seed = 78;
     direct_lighting(scene, pts.data(), nrm.data(), P, s, v2.data(), var2.data());
     CHECK(v1 != v2);
