@@ -340,6 +340,12 @@ private:
     void fill_allocation_stats();
     void run_pass(const Pass& pass);
     bool plan_pass(Pass& pass);
+    // Whether each pass fits its own α: an optimal strategy over two or more
+    // techniques. With one technique its weights are balance's (the control
+    // variate is constant), and so is its pass schedule.
+    bool fits_per_pass() const {
+        return is_optimal(settings_.lighting.strategy) && context_.techniques.size() >= 2;
+    }
     void run_passes();
     bool noise_target_met() const;
     void record_pass(double sampling_start);
@@ -432,7 +438,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     // ends there, else replaced by the passes after it, which start again at
     // round 0 (the same draws) and take rounds_per_pass or more.
     const bool under_time = settings_.time_budget > 0;
-    const bool optimal = is_optimal(settings_.lighting.strategy);
+    const bool optimal = fits_per_pass();
     next_rounds_ = !progressive_ ? budget_.full_rounds
                    : under_time  ? 1
                                  : settings_.rounds_per_pass;
@@ -703,7 +709,7 @@ bool Baker::plan_pass(Pass& pass) {
             // An optimal strategy skips a last pass far smaller than the one
             // before: its own solve (balance, below 2(k + 1) samples) joins
             // the others' and raises the error more than its samples lower it.
-            if (is_optimal(settings_.lighting.strategy) && 4 * pass.rounds < last_pass_rounds_)
+            if (fits_per_pass() && 4 * pass.rounds < last_pass_rounds_)
                 pass.rounds = 0;
         } else if (!pass.counts && settings_.noise_target <= 0) {
             // Few passes: each costs a fixed part (per-point set-up, the
