@@ -12,6 +12,7 @@
 #include "bake/vertex_points.h"
 #include "bake/uv_raster.h"
 #include "sampling/irradiance.h"
+#include "support/floor_lambert.h"
 #include "support/unit_square.h"
 
 using namespace omis;
@@ -73,25 +74,10 @@ void floor_scene(Scene& scene, Floor& f, int cells = 4) {
     scene.commit();
 }
 
-double lambert(const Vec3& x) {
-    return 2 * polygon_irradiance(x, Vec3(0, 0, 1),
-                                  {{-0.5, -0.5, 1}, {0.5, -0.5, 1}, {0.5, 0.5, 1}, {-0.5, 0.5, 1}}) /
-           kPi;
-}
+using testing::floor_lambert;
 
-// E/π averaged over texel i's footprint (the box filter the bake estimates),
-// by a 32 × 32 midpoint rule over the footprint's (u, v) square.
 double lambert_footprint(const Scene& scene, const UvCoverage& cov, std::size_t i) {
-    const Mesh& mesh = scene.geometry().mesh(0);
-    const TexelFootprintMap map(mesh, cov, i);
-    const int n = 32;
-    double sum = 0;
-    for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b) {
-            const auto bc = map.barycentrics((a + 0.5) / n, (b + 0.5) / n);
-            sum += lambert(mesh.position(map.triangle(), bc[0], bc[1]));
-        }
-    return sum / (n * n);
+    return testing::floor_lambert_footprint(scene, cov, i, 32);
 }
 
 BakeSettings floor_settings(int size) {
@@ -220,7 +206,7 @@ TEST_CASE("vertex and corner bakes agree with Lambert", "[bake]") {
                 const CornerPoint c = inset_corner(mesh, t, k);
                 const std::size_t i =
                     target == BakeTarget::Vertices ? mesh.triangles[t][k] : 3 * t + k;
-                exact[i] += lambert(mesh.position(t, c.b1, c.b2));
+                exact[i] += floor_lambert(mesh.position(t, c.b1, c.b2));
                 ++corners[i];
             }
         for (std::size_t i = 0; i < expected; ++i) {

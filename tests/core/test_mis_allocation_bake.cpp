@@ -13,6 +13,7 @@
 #include "bake/bake.h"
 #include "bake/uv_raster.h"
 #include "sampling/irradiance.h"
+#include "support/floor_lambert.h"
 #include "support/lighting_settings.h"
 
 using namespace omis;
@@ -36,24 +37,8 @@ void floor_scene(Scene& scene) {
     scene.commit();
 }
 
-double lambert(const Vec3& x) {
-    return 2 * polygon_irradiance(x, Vec3(0, 0, 1),
-                                  {{-0.5, -0.5, 1}, {0.5, -0.5, 1}, {0.5, 0.5, 1}, {-0.5, 0.5, 1}}) /
-           kPi;
-}
-
-// E/π over texel i's footprint by a 16 × 16 midpoint rule.
 double lambert_footprint(const Scene& scene, const UvCoverage& cov, std::size_t i) {
-    const Mesh& mesh = scene.geometry().mesh(0);
-    const TexelFootprintMap map(mesh, cov, i);
-    const int n = 16;
-    double sum = 0;
-    for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b) {
-            const auto bc = map.barycentrics((a + 0.5) / n, (b + 0.5) / n);
-            sum += lambert(mesh.position(map.triangle(), bc[0], bc[1]));
-        }
-    return sum / (n * n);
+    return testing::floor_lambert_footprint(scene, cov, i, 16);
 }
 
 BakeSettings allocated_settings(Strategy strategy) {
