@@ -199,6 +199,10 @@ def main():
     parser.add_argument("--seconds", type=float, default=6.0,
                         help="bake time budget per strategy (s)")
     parser.add_argument("--size", type=int, default=256, help="lightmap resolution")
+    parser.add_argument("--techniques", default=None,
+                        help="comma-separated techniques instead of the effect plan's choice "
+                             "(e.g. bsdf,unoccluded/solid-angle,power/area: with one technique, "
+                             "the plan's choice for this room, both strategies weigh alike)")
     args = parser.parse_args(script_args())
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
@@ -214,6 +218,9 @@ def main():
     scene = bpy.context.scene
     runs = [("balance", "balance", dict(use_optimal_mis=False, heuristic='BALANCE')),
             ("optimal-direct", "optimal", dict(use_optimal_mis=True, optimal_mode='DIRECT'))]
+    if args.techniques:
+        for _, _, settings in runs:
+            settings.update(technique_mode='MANUAL', techniques=set(args.techniques.split(",")))
     stats, maps = [], []
     for label, name, settings in runs:
         s, noise, mask = bake(floor, label, args.seconds, **settings)
