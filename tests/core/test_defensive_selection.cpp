@@ -16,6 +16,7 @@
 #include "render/effect_plan.h"
 #include "sampling/irradiance.h"
 #include "support/lighting_settings.h"
+#include "support/point_copies.h"
 
 using namespace omis;
 
@@ -24,30 +25,12 @@ namespace {
 constexpr double kSigmas = 4.0;
 constexpr int kCopies = 64;
 
-struct Estimate {
-    double mean = 0, standard_error = 0;
-};
-
-Estimate light_copies(const Scene& scene, const Vec3& x, const Vec3& n,
-                      const std::vector<std::string>& names, const std::vector<int>& samples,
-                      Strategy strategy, std::uint64_t seed) {
-    const DirectLightingSettings s = testing::lighting_settings(names, samples, 4, strategy, seed);
-    std::vector<double> points, normals, value(3 * kCopies), variance(3 * kCopies);
-    for (int i = 0; i < kCopies; ++i) {
-        points.insert(points.end(), {x.x, x.y, x.z});
-        normals.insert(normals.end(), {n.x, n.y, n.z});
-    }
-    direct_lighting(scene, points.data(), normals.data(), kCopies, s, value.data(),
-                    variance.data());
-    Estimate e;
-    for (int i = 0; i < kCopies; ++i) e.mean += value[3 * i + 1] / kCopies;
-    double var = 0;
-    for (int i = 0; i < kCopies; ++i) {
-        const double d = value[3 * i + 1] - e.mean;
-        var += d * d / (kCopies - 1);
-    }
-    e.standard_error = std::sqrt(var / kCopies);
-    return e;
+testing::PointCopies light_copies(const Scene& scene, const Vec3& x, const Vec3& n,
+                                  const std::vector<std::string>& names,
+                                  const std::vector<int>& samples, Strategy strategy,
+                                  std::uint64_t seed) {
+    return testing::light_point_copies(
+        scene, x, n, testing::lighting_settings(names, samples, 4, strategy, seed), kCopies);
 }
 
 std::vector<Vec3> rect(const Vec3& corner, const Vec3& u, const Vec3& v) {
@@ -100,7 +83,7 @@ TEST_CASE("defensive selection alone and with bsdf matches the exact answer", "[
     };
     std::uint64_t seed = 11;
     for (const Case& c : cases) {
-        const Estimate e = light_copies(s.scene, s.x, s.n, c.names, c.samples, c.strategy, seed++);
+        const testing::PointCopies e = light_copies(s.scene, s.x, s.n, c.names, c.samples, c.strategy, seed++);
         INFO(c.names[0] << (c.names.size() > 1 ? " + " + c.names[1] : "") << ", "
                         << strategy_name(c.strategy) << ": " << e.mean << " ± "
                         << e.standard_error << ", exact " << s.exact);

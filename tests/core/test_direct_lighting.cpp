@@ -16,6 +16,7 @@
 #include "render/direct_lighting.h"
 #include "sampling/irradiance.h"
 #include "support/lighting_settings.h"
+#include "support/point_copies.h"
 
 using namespace omis;
 
@@ -33,41 +34,15 @@ double resolution(double exact, int draws_per_point) {
     return exact / (double(kCopies) * draws_per_point);
 }
 
-struct Estimate {
-    double mean = 0, standard_error = 0, mean_reported_sd = 0;
-    bool finite = true;
-};
+using Estimate = testing::PointCopies;
 
 Estimate light_copies(const Scene& scene, const Vec3& x, const Vec3& n,
                       const std::vector<std::string>& names, const std::vector<int>& samples,
                       int rounds, Strategy strategy, std::uint64_t seed = 1,
                       DirectLightingStats* stats_out = nullptr) {
-    const DirectLightingSettings s =
-        testing::lighting_settings(names, samples, rounds, strategy, seed);
-    std::vector<double> points, normals, value(3 * kCopies), variance(3 * kCopies);
-    for (int i = 0; i < kCopies; ++i) {
-        points.insert(points.end(), {x.x, x.y, x.z});
-        normals.insert(normals.end(), {n.x, n.y, n.z});
-    }
-    const DirectLightingStats stats =
-        direct_lighting(scene, points.data(), normals.data(), kCopies, s, value.data(),
-                        variance.data());
-    if (stats_out) *stats_out = stats;
-    Estimate e;
-    for (int i = 0; i < kCopies; ++i) {
-        const double v = value[3 * i + 1];  // green channel
-        e.finite = e.finite && std::isfinite(v) && std::isfinite(variance[3 * i + 1]) &&
-                   variance[3 * i + 1] >= 0;
-        e.mean += v / kCopies;
-        e.mean_reported_sd += std::sqrt(std::max(0.0, variance[3 * i + 1])) / kCopies;
-    }
-    // Two passes: near-deterministic estimates would cancel in Σv² − n·mean².
-    double var = 0;
-    for (int i = 0; i < kCopies; ++i) {
-        const double d = value[3 * i + 1] - e.mean;
-        var += d * d / (kCopies - 1);
-    }
-    e.standard_error = std::sqrt(var / kCopies);
+    const Estimate e = testing::light_point_copies(
+        scene, x, n, testing::lighting_settings(names, samples, rounds, strategy, seed), kCopies);
+    if (stats_out) *stats_out = e.stats;
     return e;
 }
 
@@ -181,7 +156,7 @@ TEST_CASE("unoccluded rect light: every technique alone and every strategy match
                     // Biased but consistent: allow the bias of the solve on top of
                     // the noise — at most one reported σ of a single estimate.
                     CHECK(std::abs(e.mean - exact) <=
-                          kSigmas * e.standard_error + e.mean_reported_sd + floor);
+                          kSigmas * e.standard_error + e.reported_sd + floor);
                 } else {
                     CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error + floor);
                 }

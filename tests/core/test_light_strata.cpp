@@ -18,6 +18,8 @@
 #include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
 #include "sampling/irradiance.h"
+#include "support/lighting_settings.h"
+#include "support/point_copies.h"
 
 using namespace omis;
 
@@ -56,34 +58,13 @@ void add_lights(Scene& scene) {
                                         Vec3(r.radiance, r.radiance, r.radiance), false, kPi));
 }
 
-struct Copies {
-    double mean = 0, variance = 0;  // of one copy's value
-    double reported_variance = 0;   // mean over copies of the estimate's own (independent-draw)
-};
+using Copies = testing::PointCopies;
 
 Copies light_copies(const Scene& scene, const Vec3& x, const Vec3& n, const std::string& name,
                     int rounds) {
-    DirectLightingSettings s;
-    s.techniques = {*parse_technique(name)};
-    s.samples = {1};
-    s.rounds = rounds;
-    s.strategy = Strategy::Balance;
-    s.seed = 7;
-    std::vector<double> points, normals, value(3 * kCopies), variance(3 * kCopies);
-    for (int i = 0; i < kCopies; ++i) {
-        points.insert(points.end(), {x.x, x.y, x.z});
-        normals.insert(normals.end(), {n.x, n.y, n.z});
-    }
-    direct_lighting(scene, points.data(), normals.data(), kCopies, s, value.data(),
-                    variance.data());
-    Copies c;
-    for (int i = 0; i < kCopies; ++i) {
-        c.mean += value[3 * i + 1] / kCopies;
-        c.reported_variance += variance[3 * i + 1] / kCopies;
-    }
-    for (int i = 0; i < kCopies; ++i)
-        c.variance += (value[3 * i + 1] - c.mean) * (value[3 * i + 1] - c.mean) / (kCopies - 1);
-    return c;
+    return testing::light_point_copies(
+        scene, x, n, testing::lighting_settings({name}, {1}, rounds, Strategy::Balance, 7),
+        kCopies);
 }
 
 const char* const kTableTechniques[] = {"uniform/solid-angle", "power/solid-angle",
