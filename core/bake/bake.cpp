@@ -16,6 +16,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "bake/dyadic_schedule.h"
 #include "bake/uv_raster.h"
 #include "bake/vertex_points.h"
 #include "mis/allocation.h"
@@ -80,7 +81,8 @@ std::vector<SurfacePoint> corner_points(const Mesh& mesh, bool smooth) {
 struct PointState {
     double own_sum = 0;
     double variance = 0;
-    std::uint32_t weight = 0;
+    double mean_weight = 0;    // Σ w_p: samples, except a tail block's (dyadic_schedule.h)
+    std::uint32_t weight = 0;  // samples
     std::uint16_t passes = 0;
     bool done = false;
 };
@@ -243,6 +245,7 @@ struct Pass {
     int first_round = 0, rounds = 0;
     const int* counts = nullptr;  // null: the settings' counts
     std::uint32_t samples = 0;    // per point
+    double weight = 0;            // in the running means; 0: samples (a tail block's is less)
     const std::vector<DrawnRounds>* earlier = nullptr;  // allocated tiles: their calls so far
 };
 
@@ -340,6 +343,8 @@ private:
     void fill_allocation_stats();
     void run_pass(const Pass& pass);
     bool plan_pass(Pass& pass);
+    bool plan_dyadic_pass(Pass& pass);
+    void record_net_end();
     // Whether each pass fits its own α: an optimal strategy over two or more
     // techniques. With one technique its weights are balance's (the control
     // variate is constant), and so is its pass schedule.
@@ -387,6 +392,11 @@ private:
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
     BakeStatus status_ = BakeStatus::Complete;
+    // Time budgets without a noise target: passes end on powers of two
+    // (dyadic_schedule.h); the running means' luminance at the last such end.
+    bool dyadic_ = false;
+    NetRate rate_;
+    std::vector<float> net_end_luminance_;
 
     // Sample allocation: on for this bake, and per tile.
     bool allocate_ = false;
@@ -447,6 +457,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     last_done_ = budget_.last.empty();
     allocate_ = settings_.allocate_samples && is_optimal(settings_.lighting.strategy) &&
                 context_.techniques.size() >= 2 && budget_.full_rounds >= 2;
+    dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
     if (allocate_) {
         probe_ = false;  // the first pass is the allocation's pilot, not replaced
         tiles_.resize(layout_.tiles);
@@ -512,12 +523,14 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
         PointState& s = state_[r.i];
         ++s.passes;
         s.weight += pass.samples;
-        const double weight = double(pass.samples) / s.weight;
+        const double w = pass.weight > 0 ? pass.weight : double(pass.samples);
+        s.mean_weight += w;
+        const double weight = w / s.mean_weight;
         float* mean = &result_.value[3 * r.i];
         for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
             if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
-        s.own_sum += double(pass.samples) * pass.samples * r.own_variance;
-        s.variance = s.own_sum / (double(s.weight) * s.weight);
+        s.own_sum += w * w * r.own_variance;
+        s.variance = s.own_sum / (s.mean_weight * s.mean_weight);
         if (tallies_.empty()) continue;
         StreamTally& tally = tallies_[r.i];
         const double per_round = double(pass.samples) / pass.rounds;
@@ -686,6 +699,8 @@ bool Baker::plan_pass(Pass& pass) {
         }
         time_ends_ = false;
     }
+    if (dyadic_ && pass_count_ > 0 && done_rounds_ < budget_.full_rounds)
+        return plan_dyadic_pass(pass);
     pass.first_round = done_rounds_;
     if (done_rounds_ < budget_.full_rounds) {
         pass.rounds = std::min(next_rounds_, budget_.full_rounds - done_rounds_);
@@ -730,6 +745,51 @@ bool Baker::plan_pass(Pass& pass) {
     return true;
 }
 
+// The next pass of a time budget, to a power of two of rounds or a tail after
+// one (dyadic_schedule.h).
+bool Baker::plan_dyadic_pass(Pass& pass) {
+    const double fit = timer_.fit(settings_.time_budget - elapsed()) / budget_.per_round;
+    const DyadicPass next = next_dyadic_pass(done_rounds_, fit, later_min_rounds_,
+                                             budget_.full_rounds - done_rounds_);
+    if (next.rounds < 1) {
+        status_ = BakeStatus::TimeBudget;
+        return false;
+    }
+    pass.first_round = done_rounds_;
+    pass.rounds = next.rounds;
+    pass.samples = std::uint32_t(pass.rounds * budget_.per_round);
+    if (next.tail && 2 * next.rounds != done_rounds_)
+        pass.weight = budget_.per_round * tail_weight(power_of_two_floor(done_rounds_),
+                                                      next.rounds, rate_.alpha());
+    return true;
+}
+
+// At a power-of-two end: how much the running means moved since the last one
+// (mean square relative change over the baked texels, as the race measures
+// error: ε = 1 % of the mean keeps dark texels finite), for NetRate.
+void Baker::record_net_end() {
+    double sum_change = 0, sum_value = 0;
+    std::size_t covered = 0;
+    const bool first = net_end_luminance_.empty();
+    if (first) net_end_luminance_.assign(layout_.count, 0.f);
+    for (std::size_t i = 0; i < layout_.count; ++i)
+        if (layout_.covered(i)) {
+            const float* v = &result_.value[3 * i];
+            sum_value += luminance(Vec3(v[0], v[1], v[2]));
+            ++covered;
+        }
+    const double eps = 0.01 * (covered ? sum_value / double(covered) : 0.0);
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) continue;
+        const float* v = &result_.value[3 * i];
+        const double now = luminance(Vec3(v[0], v[1], v[2]));
+        const double d = now - net_end_luminance_[i];
+        if (std::isfinite(d)) sum_change += d * d / (now * now + eps * eps + 1e-300);
+        net_end_luminance_[i] = float(now);
+    }
+    rate_.add(done_rounds_, first || !covered ? 0.0 : sum_change / double(covered));
+}
+
 bool Baker::noise_target_met() const {
     return settings_.noise_target > 0 &&
            std::all_of(state_.begin(), state_.end(), [&](const PointState& s) {
@@ -758,6 +818,7 @@ void Baker::run_passes() {
             replace_probe_ = true;  // the next pass, if any, starts again at round 0
         } else {
             done_rounds_ += pass.rounds;
+            if (dyadic_ && power_of_two_floor(done_rounds_) == done_rounds_) record_net_end();
         }
         // Doubling keeps the per-pass cost small; under a noise target passes
         // grow by half only, so a texel overshoots its target by at most
@@ -777,6 +838,8 @@ void Baker::run_passes() {
 // the sample count (the next pass's estimates replace them).
 void Baker::forget_probe() {
     replace_probe_ = false;
+    net_end_luminance_.clear();
+    rate_.reset();
     for (std::size_t i = 0; i < layout_.count; ++i) {
         if (!layout_.covered(i)) continue;
         replaced_samples_ += state_[i].weight;

@@ -35,8 +35,10 @@ struct BakeSettings {
     // Rounds of the first pass when a noise target asks for progressive
     // passes (later passes grow); under a time budget the first pass is one
     // round (the optimal strategies, which solve per pass, go on with this
-    // many or more). Each pass is one estimate per
-    // texel (its own solve); passes are averaged, weighted by samples.
+    // many or more), and later passes end on powers of two of rounds, with a
+    // tail block weighted by its measured error (bake/dyadic_schedule.h).
+    // Each pass is one estimate per texel (its own solve); passes are
+    // averaged, weighted by samples (a tail block by less).
     int rounds_per_pass = 4;
     int threads = 0;            // worker threads; 0 = all cores
     // Optimal sample allocation (issue 10): the optimal strategies draw a

@@ -1,0 +1,97 @@
+#include "bake/dyadic_schedule.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace omis {
+
+int power_of_two_floor(int n) {
+    int p = 1;
+    while (p <= n / 2) p *= 2;
+    return p;
+}
+
+namespace {
+
+int power_of_two_ceil(int n) {
+    int p = 1;
+    while (p < n) p *= 2;
+    return p;
+}
+
+}  // namespace
+
+DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left) {
+    DyadicPass pass;
+    if (rounds_left <= 0 || !(fit >= 1)) return pass;
+    const int can = int(std::min<double>(fit, rounds_left));
+    if (done == 0) {  // after a dropped probe: the first net
+        const int first = power_of_two_ceil(std::max(1, min_rounds));
+        if (first <= can) pass.rounds = first;
+        else if (rounds_left <= can) pass.rounds = rounds_left;
+        return pass;
+    }
+    const int net = power_of_two_floor(done);
+    if (done == net) {
+        // A sample budget's last rounds are taken as asked, where they fit.
+        if (rounds_left <= done && rounds_left <= can) {
+            pass.rounds = rounds_left;
+            return pass;
+        }
+        if (3.0 * done <= 0.5 * fit && 3 * done <= rounds_left) {
+            pass.rounds = 3 * done;  // to 4N
+            return pass;
+        }
+        if (done <= can) {
+            pass.rounds = done;  // to 2N
+            return pass;
+        }
+    }
+    // A tail: aligned after the blocks so far, and smaller than the last one
+    // (two equal blocks would be a larger net, whose points weigh alike).
+    const int last_block = done & -done;
+    const int rounds = std::min(power_of_two_floor(can), last_block / 2);
+    if (rounds >= 1 && kSmallestTail * rounds >= net) {
+        pass.rounds = rounds;
+        pass.tail = true;
+    }
+    return pass;
+}
+
+double tail_weight(int net_rounds, int tail_rounds, double alpha) {
+    return double(net_rounds) * std::pow(double(tail_rounds) / net_rounds, alpha);
+}
+
+void NetRate::add(int end_rounds, double mean_square_change) {
+    if (!ends_.empty()) changes_.push_back(mean_square_change);
+    ends_.push_back(end_rounds);
+    if (changes_.size() < 2) return;
+    const double n0 = ends_[ends_.size() - 3], n1 = ends_[ends_.size() - 2], n2 = ends_.back();
+    const double d01 = changes_[changes_.size() - 2], d12 = changes_.back();
+    measured_ = true;
+    if (!(d01 > 0) || !(d12 > 0) || !std::isfinite(d01 / d12)) {
+        alpha_ = kMinAlpha;
+        return;
+    }
+    // The ratio of consecutive changes under error ∝ N^-α; it grows with α.
+    auto ratio = [&](double a) {
+        return (std::pow(n0, -a) - std::pow(n1, -a)) / (std::pow(n1, -a) - std::pow(n2, -a));
+    };
+    const double want = d01 / d12;
+    double lo = kMinAlpha, hi = kMaxAlpha;
+    if (want <= ratio(lo)) {
+        alpha_ = lo;
+        return;
+    }
+    if (want >= ratio(hi)) {
+        alpha_ = hi;
+        return;
+    }
+    for (int i = 0; i < 40; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (ratio(mid) < want ? lo : hi) = mid;
+    }
+    alpha_ = 0.5 * (lo + hi);
+}
+
+}  // namespace omis

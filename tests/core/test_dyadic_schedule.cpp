@@ -1,0 +1,128 @@
+// Time-budget passes end on powers of two (bake/dyadic_schedule.h): the pass
+// sizes, the tail's weight, the rate α measured from the running means, and a
+// bake under a time budget that keeps its estimate unbiased.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "bake/bake.h"
+#include "bake/dyadic_schedule.h"
+#include "render/scene.h"
+#include "render/techniques.h"
+#include "support/floor_lambert.h"
+
+using namespace omis;
+
+TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]") {
+    const int lots = 1 << 30;
+    // From N rounds: 4N when 3N take at most half the time left, else 2N.
+    CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 3);
+    CHECK(next_dyadic_pass(4, 24, 1, lots).rounds == 12);
+    CHECK(next_dyadic_pass(4, 23.9, 1, lots).rounds == 4);
+    CHECK_FALSE(next_dyadic_pass(4, 23.9, 1, lots).tail);
+    // 2N does not fit: a tail, the largest power of two that fits.
+    DyadicPass p = next_dyadic_pass(32, 31, 1, lots);
+    CHECK(p.rounds == 16);
+    CHECK(p.tail);
+    CHECK(next_dyadic_pass(32, 9, 1, lots).rounds == 8);
+    // After a tail, only smaller tails (32 + 8: at most 4).
+    CHECK(next_dyadic_pass(40, 100, 1, lots).rounds == 4);
+    CHECK(next_dyadic_pass(40, 100, 1, lots).tail);
+    // No tail below N/16, nothing when a round does not fit.
+    CHECK(next_dyadic_pass(64, 3.9, 1, lots).rounds == 0);
+    CHECK(next_dyadic_pass(64, 4, 1, lots).rounds == 4);
+    CHECK(next_dyadic_pass(8, 0.5, 1, lots).rounds == 0);
+    // After a dropped probe: the first net of at least min_rounds.
+    CHECK(next_dyadic_pass(0, 100, 3, lots).rounds == 4);
+    CHECK(next_dyadic_pass(0, 3, 3, lots).rounds == 0);
+    // A sample budget's last rounds are taken as asked.
+    CHECK(next_dyadic_pass(64, 1000, 1, 40).rounds == 40);
+    CHECK_FALSE(next_dyadic_pass(64, 1000, 1, 40).tail);
+}
+
+TEST_CASE("a tail's weight: its rounds at α = 1, less where the error falls faster",
+          "[bake][schedule]") {
+    CHECK(tail_weight(32, 8, 1.0) == Approx(8));
+    CHECK(tail_weight(32, 8, 2.0) == Approx(2));
+    CHECK(tail_weight(32, 16, 3.0) == Approx(4));
+}
+
+TEST_CASE("NetRate recovers α from the changes of nested means", "[bake][schedule]") {
+    // Changes between nested means: e(N0) − e(N1), with e(N) = C·N^-α.
+    for (double alpha : {1.0, 1.5, 2.2, 2.9})
+        for (const std::vector<int>& ends :
+             {std::vector<int>{1, 2, 4, 8}, std::vector<int>{4, 16, 32}}) {
+            NetRate rate;
+            auto e = [&](int n) { return 3e-2 * std::pow(double(n), -alpha); };
+            rate.add(ends[0], 0.0);
+            for (std::size_t i = 1; i < ends.size(); ++i)
+                rate.add(ends[i], e(ends[i - 1]) - e(ends[i]));
+            INFO("alpha " << alpha << ", ends from " << ends[0]);
+            CHECK(rate.measured());
+            CHECK(rate.alpha() == Approx(alpha).epsilon(1e-6));
+        }
+    NetRate flat;  // changes that do not fall: independent draws at most
+    flat.add(4, 0);
+    flat.add(8, 1e-3);
+    CHECK_FALSE(flat.measured());
+    CHECK(flat.alpha() == 1.0);
+    flat.add(16, 2e-3);
+    CHECK(flat.measured());
+    CHECK(flat.alpha() == 1.0);
+    NetRate steep;  // beyond the range: kept at its top
+    steep.add(4, 0);
+    steep.add(8, 1.0);
+    steep.add(16, 1e-6);
+    CHECK(steep.alpha() == NetRate::kMaxAlpha);
+}
+
+TEST_CASE("a time-budget bake ends on a power of two of rounds (plus tails) and stays "
+          "unbiased", "[bake][schedule]") {
+    std::vector<float> positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0}, uvs;
+    std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3};
+    for (std::uint32_t i : triangles)
+        uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
+    Scene scene;
+    MeshInput m;
+    m.name = "floor";
+    m.positions = ScalarArray::of(positions.data(), 4, 3);
+    m.triangles = IndexArray{triangles.data(), 2, 3};
+    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
+    scene.add_mesh(m);
+    scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
+                                    Vec3(2, 2, 2), false, kPi));
+    scene.commit();
+
+    BakeSettings s;
+    s.lighting.techniques = {*parse_technique("uniform/area")};
+    s.lighting.samples = {1};
+    s.lighting.rounds = 1 << 20;
+    s.width = s.height = 8;
+    // The mean over the floor's texels of (estimate − exact)/σ, σ the
+    // estimate's reported noise (the independent-draw formula, an upper
+    // bound of its true error: the test can only be stricter than 4σ).
+    const UvCoverage cov = rasterize_uv(scene.geometry().mesh(0), s.width, s.height);
+    for (double budget : {0.02, 0.1}) {
+        s.time_budget = budget;
+        const BakeResult r = bake(scene, s);
+        INFO("budget " << budget);
+        const std::uint32_t n = r.samples[0];
+        const std::uint32_t net = std::uint32_t(power_of_two_floor(int(n)));
+        CHECK(n - net < net);  // a net and tails smaller than it
+        double sum_z = 0;
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < r.samples.size(); ++i) {
+            if (r.mask[i] <= 0) continue;
+            CHECK(r.samples[i] == n);
+            const double exact = testing::floor_lambert_footprint(scene, cov, i, 16);
+            const double sigma = r.noise[i] * exact;
+            REQUIRE(sigma > 0);
+            sum_z += (r.value[3 * i] - exact) / sigma;
+            ++count;
+        }
+        // 64 texels, each z within ±1 standard deviation of its error at most:
+        // their mean is off by more than 4/√64 = 0.5 only for a bias.
+        CHECK(std::abs(sum_z / double(count)) < 0.5);
+    }
+}
