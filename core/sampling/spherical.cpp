@@ -53,6 +53,10 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.phi0_ = std::atan2(r.x0_, r.z_);
     r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
     r.r0_ = std::hypot(r.x0_, r.z_);
+    const Vec3 near0{r.x0_, r.y0_, -r.z_}, near1{r.x0_, r.y1_, -r.z_};  // sub_solid_angle's a, d
+    r.la_ = length(near0);
+    r.ld_ = length(near1);
+    r.ad_ = dot(near0, near1);
     r.omega_ = r.sub_solid_angle(r.W_);
     if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
     return r;
@@ -66,12 +70,20 @@ double SphericalRect::width_at(double delta, double c) const {
 }
 
 double SphericalRect::sub_solid_angle(double w) const {
+    // a and d (the edge at x0) are the same at every w: their lengths and a·d
+    // are kept (make), as Newton evaluates this a few times per sample.
     const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
-    const double la = length(a), lb = length(b), lc = length(c), ld = length(d);
+    const double la = la_, lb = length(b), lc = length(c), ld = ld_;
     const double num = z_ * w * H_;
     const double den1 = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-    const double den2 = la * lc * ld + dot(a, c) * ld + dot(a, d) * lc + dot(c, d) * la;
-    return 2.0 * (std::atan2(num, den1) + std::atan2(num, den2));
+    const double den2 = la * lc * ld + dot(a, c) * ld + ad_ * lc + dot(c, d) * la;
+    // The two triangles' half-angles θ1 + θ2 (each in [0, π), their sum Ω/2 <
+    // π) as one atan2: tan(θ1 + θ2) = num (den1 + den2) / (den1 den2 − num²),
+    // no subtraction of angles (one atan2 instead of two per Newton step).
+    // A sum near π (Ω near 2π) may round den1 + den2 below 0: clamped, it
+    // gives π.
+    const double y = std::max(0.0, num * (den1 + den2));
+    return 2.0 * std::atan2(y, den1 * den2 - num * num);
 }
 
 double SphericalRect::h_at(double cos_phi, double y) const {

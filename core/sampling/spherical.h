@@ -53,6 +53,7 @@ private:
     Vec3 ex_, ey_, ez_;  // ez points from the plane toward x
     double x0_ = 0, y0_ = 0, y1_ = 0, W_ = 0, H_ = 0, z_ = 0;  // z_ = distance to plane
     double phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
+    double la_ = 0, ld_ = 0, ad_ = 0;  // |a|, |d|, a·d of sub_solid_angle's fixed corners
 };
 
 // The triangle (p0, p1, p2) seen from x: Arvo's two steps (sub-triangle p0 p1 C' of
