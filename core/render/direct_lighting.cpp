@@ -240,8 +240,13 @@ struct PointLighting::Impl {
     } shape_pdfs_;
     std::uint64_t along_serial_ = 0;  // counts along_'s recomputations
     // The last light sample: its light surely lies along its direction, and
-    // its shape density there is the one the draw returned (pdf() reuses it
-    // instead of inverting the draw: ~10 % of a solid-angle sample).
+    // its shape density there is the one the draw returned — pdf() reuses it
+    // instead of inverting the draw (~10 % of a solid-angle sample) where the
+    // weights are continuous in the densities (reuse_drawn_pdf_), so that a
+    // last-digit difference from the evaluated density changes nothing. The
+    // maximum and cutoff heuristics compare densities (exact ties where two
+    // techniques share a density), so there every density stays one function
+    // of the direction, whichever technique drew it.
     struct Drawn {
         std::uint32_t light = ~0u;
         Vec3 w;
@@ -249,8 +254,10 @@ struct PointLighting::Impl {
         double pdf = 0;
         std::uint64_t point = ~0ull;  // point_serial_ of the draw
     } drawn_;
+    const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
+                                  p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
-        if (drawn_.light != l || drawn_.point != point_serial_ || drawn_.sampler != sampler ||
+        if (!reuse_drawn_pdf_ || drawn_.light != l || drawn_.point != point_serial_ || drawn_.sampler != sampler ||
             drawn_.w.x != w.x || drawn_.w.y != w.y || drawn_.w.z != w.z)
             return false;
         pdf = drawn_.pdf;
