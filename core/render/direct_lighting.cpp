@@ -122,6 +122,11 @@ struct PointLighting::Impl {
     std::vector<std::uint32_t> draw_start_;
     AllocationPilot* pilot_ = nullptr;
     class LightStreams;
+    // LightStreams' storage, kept from point to point (no allocation per
+    // point and pass): per technique, stream and table slot, the draws taken
+    // and the slot's own sequence once made.
+    std::vector<std::uint32_t> taken_scratch_;
+    std::vector<std::optional<ScrambledSobol>> sequences_scratch_;
     // shade's pieces: how its rounds fall into the streams, the estimators
     // they go to, the delta lights' sums, and the point's estimate from them.
     struct RoundPlan {
@@ -1021,7 +1026,8 @@ class PointLighting::Impl::LightStreams {
 public:
     LightStreams(Impl& impl, std::uint64_t base, const Active& active)
         : impl_(impl), base_(base), lights_(table_slots(impl)),
-          streams_(impl.p_.settings.streams) {
+          streams_(impl.p_.settings.streams), taken_(impl.taken_scratch_),
+          sequences_(impl.sequences_scratch_) {
         const auto& techniques = impl.p_.settings.techniques;
         // Counts only where a technique draws from a table: zeroing them per
         // point for 16k tree-drawn lights cost 40 % of an emissive mesh's bake.
@@ -1029,7 +1035,7 @@ public:
                          [&](int k) { return uses_table(k); }))
             return;
         taken_.assign(techniques.size() * std::size_t(streams_) * lights_, 0);
-        sequences_.resize(taken_.size());
+        sequences_.assign(taken_.size(), std::nullopt);
         for (int k : active.lights) {
             if (!uses_table(k)) continue;
             for (int s = 0; s < streams_; ++s) {
@@ -1085,8 +1091,8 @@ private:
     std::uint64_t base_;
     std::size_t lights_;
     int streams_;
-    std::vector<std::uint32_t> taken_;  // per technique, stream and table slot
-    std::vector<std::optional<ScrambledSobol>> sequences_;  // each slot's own, per cell
+    std::vector<std::uint32_t>& taken_;  // per technique, stream and table slot
+    std::vector<std::optional<ScrambledSobol>>& sequences_;  // each slot's own, per cell
 };
 
 // How a call's rounds fall into the streams, and whether each stream's
