@@ -6,8 +6,7 @@ namespace omis {
 namespace {
 
 std::uint32_t reverse_bits(std::uint32_t x) {
-    x = (x << 16) | (x >> 16);
-    x = ((x & 0x00ff00ffu) << 8) | ((x & 0xff00ff00u) >> 8);
+    x = __builtin_bswap32(x);  // the bytes; then the bits within them
     x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
     x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
     x = ((x & 0x55555555u) << 1) | ((x & 0xaaaaaaaau) >> 1);
@@ -33,17 +32,40 @@ std::uint32_t group_seed(std::uint64_t seed, std::uint32_t group, std::uint32_t 
 
 double to_unit(std::uint32_t x) { return x * 0x1.0p-32; }
 
+// Sobol' second dimension as a GF(2)-linear map, one 256-entry table per
+// byte of the index: four lookups instead of a loop over up to 32 bits (the
+// shuffled indices have high bits set).
+struct Dim1Tables {
+    std::uint32_t byte[4][256] = {};
+    constexpr Dim1Tables() {
+        // Direction numbers of primitive polynomial x + 1: v_0 = 2^31,
+        // v_i = v_{i-1} ^ (v_{i-1} >> 1).
+        std::uint32_t v[32] = {};
+        v[0] = 0x80000000u;
+        for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
+        for (int b = 0; b < 4; ++b)
+            for (std::uint32_t x = 0; x < 256; ++x) {
+                std::uint32_t r = 0;
+                for (int i = 0; i < 8; ++i)
+                    if (x >> i & 1) r ^= v[8 * b + i];
+                byte[b][x] = r;
+            }
+    }
+};
+constexpr Dim1Tables kDim1;  // built at compile time
+
+// owen_scramble(sobol_dim0(i), seed): the reversals cancel.
+std::uint32_t scrambled_dim0(std::uint32_t i, std::uint32_t seed) {
+    return reverse_bits(laine_karras(i, seed));
+}
+
 }  // namespace
 
 std::uint32_t sobol_dim0(std::uint32_t index) { return reverse_bits(index); }
 
 std::uint32_t sobol_dim1(std::uint32_t index) {
-    // Direction numbers of primitive polynomial x + 1: v_0 = 2^31,
-    // v_i = v_{i-1} ^ (v_{i-1} >> 1).
-    std::uint32_t x = 0, v = 0x80000000u;
-    for (; index; index >>= 1, v ^= v >> 1)
-        if (index & 1) x ^= v;
-    return x;
+    return kDim1.byte[0][index & 0xff] ^ kDim1.byte[1][index >> 8 & 0xff] ^
+           kDim1.byte[2][index >> 16 & 0xff] ^ kDim1.byte[3][index >> 24];
 }
 
 std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
@@ -63,13 +85,13 @@ double ScrambledSobol::get_1d(std::uint32_t index, std::uint32_t group) const {
     // Shuffling the index by a nested scramble keeps aligned power-of-two
     // blocks together, so prefixes stay stratified.
     const std::uint32_t i = owen_scramble(index, seed(group, 0));
-    return to_unit(owen_scramble(sobol_dim0(i), seed(group, 1)));
+    return to_unit(scrambled_dim0(i, seed(group, 1)));
 }
 
 void ScrambledSobol::get_2d(std::uint32_t index, std::uint32_t group, double& u,
                             double& v) const {
     const std::uint32_t i = owen_scramble(index, seed(group, 0));
-    u = to_unit(owen_scramble(sobol_dim0(i), seed(group, 1)));
+    u = to_unit(scrambled_dim0(i, seed(group, 1)));
     v = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
 }
 

@@ -53,26 +53,37 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.phi0_ = std::atan2(r.x0_, r.z_);
     r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
     r.r0_ = std::hypot(r.x0_, r.z_);
+    const Vec3 near0{r.x0_, r.y0_, -r.z_}, near1{r.x0_, r.y1_, -r.z_};  // sub_solid_angle's a, d
+    r.la_ = length(near0);
+    r.ld_ = length(near1);
+    r.ad_ = dot(near0, near1);
     r.omega_ = r.sub_solid_angle(r.W_);
     if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
     return r;
 }
 
-double SphericalRect::width_at(double delta) const {
+double SphericalRect::width_at(double delta, double c) const {
     if (delta >= dphi_) return W_;
-    const double c = std::cos(phi0_ + delta);
     if (!(c > 0)) return W_;
     // z (tan φ − tan φ0) = sin δ · r0 / cos φ: no difference of two tangents.
     return std::clamp(std::sin(delta) * r0_ / c, 0.0, W_);
 }
 
 double SphericalRect::sub_solid_angle(double w) const {
+    // a and d (the edge at x0) are the same at every w: their lengths and a·d
+    // are kept (make), as Newton evaluates this a few times per sample.
     const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
-    const double la = length(a), lb = length(b), lc = length(c), ld = length(d);
+    const double la = la_, lb = length(b), lc = length(c), ld = ld_;
     const double num = z_ * w * H_;
     const double den1 = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-    const double den2 = la * lc * ld + dot(a, c) * ld + dot(a, d) * lc + dot(c, d) * la;
-    return 2.0 * (std::atan2(num, den1) + std::atan2(num, den2));
+    const double den2 = la * lc * ld + dot(a, c) * ld + ad_ * lc + dot(c, d) * la;
+    // The two triangles' half-angles θ1 + θ2 (each in [0, π), their sum Ω/2 <
+    // π) as one atan2: tan(θ1 + θ2) = num (den1 + den2) / (den1 den2 − num²),
+    // no subtraction of angles (one atan2 instead of two per Newton step).
+    // A sum near π (Ω near 2π) may round den1 + den2 below 0: clamped, it
+    // gives π.
+    const double y = std::max(0.0, num * (den1 + den2));
+    return 2.0 * std::atan2(y, den1 * den2 - num * num);
 }
 
 double SphericalRect::h_at(double cos_phi, double y) const {
@@ -83,10 +94,10 @@ DirSample SphericalRect::sample(double u1, double u2) const {
     const double target = u1 * omega_;
     double lo = 0, hi = dphi_, delta = u1 * dphi_;
     for (int it = 0; it < 100; ++it) {
-        const double g = sub_solid_angle(width_at(delta)) - target;
+        const double c = std::cos(phi0_ + delta);
+        const double g = sub_solid_angle(width_at(delta, c)) - target;
         if (g == 0) break;
         (g < 0 ? lo : hi) = delta;
-        const double c = std::cos(phi0_ + delta);
         const double dg = h_at(c, y1_) - h_at(c, y0_);  // dΩ/dφ, exact
         double next = delta - g / dg;
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
@@ -106,6 +117,11 @@ DirSample SphericalRect::sample(double u1, double u2) const {
     return s;
 }
 
+Vec3 SphericalRect::corner_direction(int i, int j) const {
+    // u1 = i puts φ on the edge x0 + i·W, u2 = j puts h at y0 + j·H.
+    return normalize(ex_ * (x0_ + i * W_) + ey_ * (j ? y1_ : y0_) - ez_ * z_);
+}
+
 double SphericalRect::pdf(const Vec3& w) const {
     const double lz = dot(w, ez_);
     if (!(lz < 0)) return 0;
@@ -120,7 +136,7 @@ Point2 SphericalRect::invert(const Vec3& w) const {
     const double lx = dot(w, ex_), ly = dot(w, ey_), lz = dot(w, ez_);
     const double phi = std::atan2(lx, -lz);
     const double delta = std::clamp(phi - phi0_, 0.0, dphi_);
-    const double u1 = sub_solid_angle(width_at(delta)) / omega_;
+    const double u1 = sub_solid_angle(width_at(delta, std::cos(phi0_ + delta))) / omega_;
     const double c = std::cos(phi);
     const double h0 = h_at(c, y0_), h1 = h_at(c, y1_);
     return {std::clamp(u1, 0.0, 1.0), std::clamp((ly - h0) / (h1 - h0), 0.0, 1.0)};
@@ -192,6 +208,11 @@ DirSample SphericalTriangle::sample(double u1, double u2) const {
     out.dist = den != 0 ? dot(to_p0_, n) / den : std::numeric_limits<double>::max();
     if (!(out.dist > 0) || !std::isfinite(out.dist)) out.dist = hit(out.dir, b1, b2, t) ? t : dist_p0_;
     return out;
+}
+
+Vec3 SphericalTriangle::corner_direction(int i, int j) const {
+    if (j == 0) return dir_p1_;
+    return i == 0 ? dir_p0_ : normalize(to_p0_ + edge02_);
 }
 
 bool SphericalTriangle::hit(const Vec3& w, double& b1, double& b2, double& t) const {

@@ -39,17 +39,21 @@ public:
                                              const Vec3& edge_u, const Vec3& edge_v);
     double solid_angle() const { return omega_; }
     DirSample sample(double u1, double u2) const;
+    // sample(i, j).dir for i, j ∈ {0, 1}: the unit direction to the corner
+    // corner + i·edge_u + j·edge_v, in closed form.
+    Vec3 corner_direction(int i, int j) const;
     // Solid angle: 1/Ω if w hits the rectangle, else 0.
     double pdf(const Vec3& w) const;
     Point2 invert(const Vec3& w) const;
 
 private:
     double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
-    double width_at(double delta) const;     // x(φ0+δ) − x0
+    double width_at(double delta, double cos_phi) const;  // x(φ0+δ) − x0; cos_phi = cos(φ0+δ)
     double h_at(double cos_phi, double y) const;
     Vec3 ex_, ey_, ez_;  // ez points from the plane toward x
     double x0_ = 0, y0_ = 0, y1_ = 0, W_ = 0, H_ = 0, z_ = 0;  // z_ = distance to plane
     double phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
+    double la_ = 0, ld_ = 0, ad_ = 0;  // |a|, |d|, a·d of sub_solid_angle's fixed corners
 };
 
 // The triangle (p0, p1, p2) seen from x: Arvo's two steps (sub-triangle p0 p1 C' of
@@ -63,6 +67,9 @@ public:
                                                  const Vec3& p1, const Vec3& p2);
     double solid_angle() const { return omega_; }
     DirSample sample(double u1, double u2) const;
+    // sample(i, j).dir for i, j ∈ {0, 1}, in closed form: p̂1 where j = 0
+    // (the second step starts at p1), p̂0 at (0, 1), p̂2 at (1, 1).
+    Vec3 corner_direction(int i, int j) const;
     // Solid angle: 1/Ω if w hits the triangle, else 0.
     double pdf(const Vec3& w) const;
     Point2 invert(const Vec3& w) const;
