@@ -39,11 +39,14 @@ void add_receiver(Scene& scene) {
     static const std::vector<float> positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
     static const std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3};
     static const std::vector<float> uvs = {0, 0, 1, 0, 1, 1, 0, 0, 1, 1, 0, 1};
+    static const std::vector<float> normals = {0, 0, 1, 0, 0, 1, 0, 0, 1,
+                                               0, 0, 1, 0, 0, 1, 0, 0, 1};  // as exported
     MeshInput m;
     m.name = "receiver";
     m.positions = ScalarArray::of(positions.data(), 4, 3);
     m.triangles = IndexArray{triangles.data(), 2, 3};
     m.uvs = ScalarArray::of(uvs.data(), 6, 2);
+    m.normals = ScalarArray::of(normals.data(), 6, 3);
     scene.add_mesh(m);
 }
 

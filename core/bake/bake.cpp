@@ -449,6 +449,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     total_work_ = double(std::max<std::size_t>(1, to_shade)) *
                   double(std::max<long long>(1, samples_per_point));
     context_.keep_going = [this] { return keep_going(); };
+    context_.texel_tables.index_points(layout_.count);  // the points are 0 … count − 1
 
     // Under a time budget the first pass — the part a budget cannot cut — is
     // a single round, so small budgets are not eaten by it; it also measures

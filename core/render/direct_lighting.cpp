@@ -204,16 +204,23 @@ struct PointLighting::Impl {
         SurfacePoint p_[5];
     };
     bool choose_lights_over(int k, Probes& probes);
-    void mix_in_uniform(int k, Probes& probes);
-    std::vector<char> reaches_;  // mix_in_uniform's scratch, per table slot
+    // reaches_: per slot of technique k's table, whether its light reaches
+    // some probe (as the table's maker found).
+    void mix_in_uniform(int k);
+    std::vector<char> reaches_;
     // `unoccluded` weights at the footprint's anchor (Footprint::table_anchor),
-    // shared by the texels of its block: kept for the last anchor seen, per
+    // shared by the texels of its block: kept for the last kAnchorSlots
+    // anchors seen (a tile's row of texels crosses several blocks), per
     // integrated light (index into p_.integrated), NaN until asked.
     struct AnchorWeights {
-        bool valid = false;  // the footprint being set up has an anchor
+        bool used = false;
         Footprint::Anchor anchor;
         std::vector<double> irradiance;
-    } anchor_;
+    };
+    static constexpr int kAnchorSlots = 8;
+    AnchorWeights anchors_[kAnchorSlots];
+    AnchorWeights* anchor_ = nullptr;  // the footprint being set up's; null: none
+    int next_anchor_slot_ = 0;
     void set_anchor(const Footprint* footprint);
     double centre_weight(std::size_t i, const SurfacePoint& centre);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
@@ -417,8 +424,8 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     }
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
     if (t.selection == LightSelection::Defensive) {
-        Probes point(SurfacePoint{x, n, n}, nullptr);
-        mix_in_uniform(k, point);
+        reaches_.assign(c.lights.size(), 1);  // the table holds the lights that reach x
+        mix_in_uniform(k);
     }
     return !c.lights.empty();
 }
@@ -449,20 +456,22 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes) {
         t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive;
     bool any = false;
     double largest = 0;
+    reaches_.assign(p_.integrated.size(), 0);
     for (std::size_t i = 0; i < p_.integrated.size(); ++i) {
         const std::uint32_t l = p_.integrated[i];
         const Light& light = p_.scene.lights()[l];
         double w = 0;
         if (sampler_applies(light, t.sampler, probes[0].x, probes[0].n)) {
             w = by_irradiance ? centre_weight(i, probes[0]) : weight(l, probes[0]);
-            any = true;
+            reaches_[i] = 1;
         } else {
             for (int j = 1; j < n_probes; ++j)
                 if (sampler_applies(light, t.sampler, probes[j].x, probes[j].n)) {
                     w += weight(l, probes[j]) / n_probes;
-                    any = true;
+                    reaches_[i] = 1;
                 }
         }
+        any = any || reaches_[i];
         c.lights.push_back(l);
         c.probability.push_back(w);
         largest = std::max(largest, w);
@@ -479,7 +488,7 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes) {
         c.cdf.push_back(running);
     }
     c.cdf.back() = 1.0;
-    if (t.selection == LightSelection::Defensive) mix_in_uniform(k, probes);
+    if (t.selection == LightSelection::Defensive) mix_in_uniform(k);
     return true;
 }
 
@@ -488,19 +497,11 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes) {
 // the unoccluded weights undervalue — one shadowed where it is bright — keeps
 // a fair share of a single technique's samples. Lights reaching no probe keep
 // their tiny share (unbiased wherever the technique is active).
-void PointLighting::Impl::mix_in_uniform(int k, Probes& probes) {
-    const int n_probes = probes.count();
-    const Technique& t = p_.settings.techniques[k];
+void PointLighting::Impl::mix_in_uniform(int k) {
     LightChoice& c = choices_[k];
-    std::vector<char>& reaches = reaches_;
-    reaches.assign(c.lights.size(), 0);
+    const std::vector<char>& reaches = reaches_;
     int reaching = 0;
-    for (std::size_t i = 0; i < c.lights.size(); ++i) {
-        const Light& light = p_.scene.lights()[c.lights[i]];
-        for (int j = 0; j < n_probes && !reaches[i]; ++j)
-            reaches[i] = sampler_applies(light, t.sampler, probes[j].x, probes[j].n);
-        reaching += reaches[i];
-    }
+    for (std::size_t i = 0; i < c.lights.size(); ++i) reaching += reaches[i];
     if (reaching == 0) return;
     double running = 0;
     for (std::size_t i = 0; i < c.lights.size(); ++i) {
@@ -516,16 +517,22 @@ void PointLighting::Impl::mix_in_uniform(int k, Probes& probes) {
 // next footprints name the same anchor (a block's texels, shaded in a row).
 void PointLighting::Impl::set_anchor(const Footprint* footprint) {
     Footprint::Anchor a;
-    anchor_.valid = footprint && footprint->table_anchor(a);
-    if (!anchor_.valid) return;
-    const Footprint::Anchor& kept = anchor_.anchor;
-    const bool same = kept.id == a.id && kept.at.x.x == a.at.x.x && kept.at.x.y == a.at.x.y &&
-                      kept.at.x.z == a.at.x.z && kept.at.n.x == a.at.n.x &&
-                      kept.at.n.y == a.at.n.y && kept.at.n.z == a.at.n.z &&
-                      anchor_.irradiance.size() == p_.integrated.size();
-    if (same) return;
-    anchor_.anchor = a;
-    anchor_.irradiance.assign(p_.integrated.size(), std::numeric_limits<double>::quiet_NaN());
+    anchor_ = nullptr;
+    if (!footprint || !footprint->table_anchor(a)) return;
+    for (AnchorWeights& slot : anchors_) {
+        const Footprint::Anchor& kept = slot.anchor;
+        if (slot.used && kept.id == a.id && kept.at.x.x == a.at.x.x &&
+            kept.at.x.y == a.at.x.y && kept.at.x.z == a.at.x.z && kept.at.n.x == a.at.n.x &&
+            kept.at.n.y == a.at.n.y && kept.at.n.z == a.at.n.z) {
+            anchor_ = &slot;
+            return;
+        }
+    }
+    anchor_ = &anchors_[next_anchor_slot_];
+    next_anchor_slot_ = (next_anchor_slot_ + 1) % kAnchorSlots;
+    anchor_->used = true;
+    anchor_->anchor = a;
+    anchor_->irradiance.assign(p_.integrated.size(), std::numeric_limits<double>::quiet_NaN());
 }
 
 // The `unoccluded` weight of integrated light i for a footprint whose centre
@@ -534,9 +541,9 @@ void PointLighting::Impl::set_anchor(const Footprint* footprint) {
 // pass and thread makes the same table.
 double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& centre) {
     const Light& light = p_.scene.lights()[p_.integrated[i]];
-    if (anchor_.valid) {
-        double& w = anchor_.irradiance[i];
-        if (std::isnan(w)) w = unoccluded_irradiance(light, anchor_.anchor.at.x, anchor_.anchor.at.n);
+    if (anchor_) {
+        double& w = anchor_->irradiance[i];
+        if (std::isnan(w)) w = unoccluded_irradiance(light, anchor_->anchor.at.x, anchor_->anchor.at.n);
         if (w > 0) return w;
     }
     return unoccluded_irradiance(light, centre.x, centre.n);
