@@ -35,14 +35,29 @@ constexpr int kTile = 16;
 class TexelFootprint final : public Footprint {
 public:
     TexelFootprint(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth)
-        : mesh_(mesh), map_(mesh, cov, i), ng_(mesh.geometric_normal(map_.triangle())),
-          smooth_(smooth) {}
+        : mesh_(mesh), cov_(cov), i_(i), map_(mesh, cov, i),
+          ng_(mesh.geometric_normal(map_.triangle())), smooth_(smooth) {}
 
     SurfacePoint at(double u, double v) const override {
         const auto b = map_.barycentrics(u, v);
         return point(b[0], b[1]);
     }
     SurfacePoint centre() const { return at(0.5, 0.5); }
+
+    // The texels of a kAnchorBlock² block share their light tables' weights,
+    // measured at the centre of one texel near the block's middle, when that
+    // texel lies on the same triangle (else each texel is weighed alone).
+    bool table_anchor(Anchor& anchor) const override {
+        const std::size_t w = std::size_t(cov_.width), h = std::size_t(cov_.height);
+        const std::size_t x = i_ % w, y = i_ / w;
+        const std::size_t ax = std::min(w - 1, x / kAnchorBlock * kAnchorBlock + kAnchorBlock / 2);
+        const std::size_t ay = std::min(h - 1, y / kAnchorBlock * kAnchorBlock + kAnchorBlock / 2);
+        const std::size_t a = ay * w + ax;
+        if (cov_.triangle[a] != map_.triangle()) return false;
+        anchor.id = a;
+        anchor.at = point(cov_.b1[a], cov_.b2[a]);
+        return true;
+    }
 
 private:
     SurfacePoint point(double b1, double b2) const {
@@ -52,7 +67,13 @@ private:
         return {mesh_.position(t, b1, b2), n, ng_};
     }
 
+    // 4² texels a measurement: a 16th of the weights' cost (the spread and
+    // round lights' dominated a one-sample pass), while the weights move by
+    // what light changes over 4 texels.
+    static constexpr std::size_t kAnchorBlock = 4;
     const Mesh& mesh_;
+    const UvCoverage& cov_;
+    std::size_t i_;
     TexelFootprintMap map_;
     Vec3 ng_;
     bool smooth_;
@@ -438,6 +459,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     total_work_ = double(std::max<std::size_t>(1, to_shade)) *
                   double(std::max<long long>(1, samples_per_point));
     context_.keep_going = [this] { return keep_going(); };
+    context_.texel_tables.index_points(layout_.count);  // the points are 0 … count − 1
 
     // Under a time budget the first pass — the part a budget cannot cut — is
     // a single round, so small budgets are not eaten by it; it also measures

@@ -85,7 +85,8 @@ struct PointLighting::Impl {
         std::vector<int> all, lights;  // technique indices
         std::uint64_t mask = 0, light_mask = 0;
     };
-    void choose_active(const SurfacePoint& centre, const Footprint* footprint, Active& active);
+    class Probes;
+    void choose_active(Probes& probes, const Footprint* footprint, Active& active);
     // choose_active through the context's texel tables: with `keep`, a point
     // shaded before (same stream) takes its techniques and tables from there,
     // and one shaded first leaves them there for its next pass.
@@ -182,8 +183,51 @@ struct PointLighting::Impl {
     // choose_lights' per-point table for a whole footprint (its probes: the
     // centre and corners), so a light that reaches part of a texel keeps its
     // share wherever in the texel it was probed.
-    bool choose_lights_over(int k, const SurfacePoint* probes, int n_probes);
-    void mix_in_uniform(int k, const SurfacePoint* probes, int n_probes);
+    // A footprint's probes for its tables and region: the centre, and its
+    // corners made only when first asked (most lights reach the centre, and
+    // then no corner is looked at).
+    class Probes {
+    public:
+        Probes(const SurfacePoint& centre, const Footprint* footprint)
+            : footprint_(footprint), corners_ready_(!footprint) {
+            p_[0] = centre;
+        }
+        int count() const { return footprint_ ? 5 : 1; }
+        const SurfacePoint& operator[](int i) {
+            if (i > 0 && !corners_ready_) {
+                int j = 1;
+                for (double u : {0.0, 1.0})
+                    for (double v : {0.0, 1.0}) p_[j++] = footprint_->at(u, v);
+                corners_ready_ = true;
+            }
+            return p_[i];
+        }
+
+    private:
+        const Footprint* footprint_;
+        bool corners_ready_;
+        SurfacePoint p_[5];
+    };
+    bool choose_lights_over(int k, Probes& probes);
+    // reaches_: per slot of technique k's table, whether its light reaches
+    // some probe (as the table's maker found).
+    void mix_in_uniform(int k);
+    std::vector<char> reaches_;
+    // `unoccluded` weights at the footprint's anchor (Footprint::table_anchor),
+    // shared by the texels of its block: kept for the last kAnchorSlots
+    // anchors seen (a tile's row of texels crosses several blocks), per
+    // integrated light (index into p_.integrated), NaN until asked.
+    struct AnchorWeights {
+        bool used = false;
+        Footprint::Anchor anchor;
+        std::vector<double> irradiance;
+    };
+    static constexpr int kAnchorSlots = 8;
+    AnchorWeights anchors_[kAnchorSlots];
+    AnchorWeights* anchor_ = nullptr;  // the footprint being set up's; null: none
+    int next_anchor_slot_ = 0;
+    void set_anchor(const Footprint* footprint);
+    double centre_weight(std::size_t i, const SurfacePoint& centre);
     std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
@@ -276,7 +320,7 @@ struct PointLighting::Impl {
     // afresh at each sample's own position.
     LightSelector::Receiver region_;
     LightSelector::Memo region_memo_;
-    void set_region(const SurfacePoint& centre, const Footprint* footprint);
+    void set_region(Probes& probes);
     LightSelector::Receiver receiver_at(const Vec3& x, const Vec3& n,
                                         LightSelector::Memo*& memo);
 };
@@ -407,8 +451,8 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
     }
     if (!c.cdf.empty()) c.cdf.back() = 1.0;
     if (t.selection == LightSelection::Defensive) {
-        const SurfacePoint point{x, n, n};
-        mix_in_uniform(k, &point, 1);
+        reaches_.assign(c.lights.size(), 1);  // the table holds the lights that reach x
+        mix_in_uniform(k);
     }
     return !c.lights.empty();
 }
@@ -422,7 +466,8 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
 // alone dropped a light from every texel whose centre it did not reach — the
 // rim of a spread light's reach, the plane of a one-sided light. Corners are
 // probed only for lights that miss the centre: the weights cost per pass.
-bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, int n_probes) {
+bool PointLighting::Impl::choose_lights_over(int k, Probes& probes) {
+    const int n_probes = probes.count();
     const Technique& t = p_.settings.techniques[k];
     LightChoice& c = choices_[k];
     c.lights.clear();
@@ -434,21 +479,26 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
             return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
         return 1.0;
     };
+    const bool by_irradiance =
+        t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive;
     bool any = false;
     double largest = 0;
-    for (std::uint32_t l : p_.integrated) {
+    reaches_.assign(p_.integrated.size(), 0);
+    for (std::size_t i = 0; i < p_.integrated.size(); ++i) {
+        const std::uint32_t l = p_.integrated[i];
         const Light& light = p_.scene.lights()[l];
         double w = 0;
         if (sampler_applies(light, t.sampler, probes[0].x, probes[0].n)) {
-            w = weight(l, probes[0]);
-            any = true;
+            w = by_irradiance ? centre_weight(i, probes[0]) : weight(l, probes[0]);
+            reaches_[i] = 1;
         } else {
-            for (int i = 1; i < n_probes; ++i)
-                if (sampler_applies(light, t.sampler, probes[i].x, probes[i].n)) {
-                    w += weight(l, probes[i]) / n_probes;
-                    any = true;
+            for (int j = 1; j < n_probes; ++j)
+                if (sampler_applies(light, t.sampler, probes[j].x, probes[j].n)) {
+                    w += weight(l, probes[j]) / n_probes;
+                    reaches_[i] = 1;
                 }
         }
+        any = any || reaches_[i];
         c.lights.push_back(l);
         c.probability.push_back(w);
         largest = std::max(largest, w);
@@ -465,7 +515,7 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
         c.cdf.push_back(running);
     }
     c.cdf.back() = 1.0;
-    if (t.selection == LightSelection::Defensive) mix_in_uniform(k, probes, n_probes);
+    if (t.selection == LightSelection::Defensive) mix_in_uniform(k);
     return true;
 }
 
@@ -474,17 +524,11 @@ bool PointLighting::Impl::choose_lights_over(int k, const SurfacePoint* probes, 
 // the unoccluded weights undervalue — one shadowed where it is bright — keeps
 // a fair share of a single technique's samples. Lights reaching no probe keep
 // their tiny share (unbiased wherever the technique is active).
-void PointLighting::Impl::mix_in_uniform(int k, const SurfacePoint* probes, int n_probes) {
-    const Technique& t = p_.settings.techniques[k];
+void PointLighting::Impl::mix_in_uniform(int k) {
     LightChoice& c = choices_[k];
-    std::vector<char> reaches(c.lights.size(), 0);
+    const std::vector<char>& reaches = reaches_;
     int reaching = 0;
-    for (std::size_t i = 0; i < c.lights.size(); ++i) {
-        const Light& light = p_.scene.lights()[c.lights[i]];
-        for (int j = 0; j < n_probes && !reaches[i]; ++j)
-            reaches[i] = sampler_applies(light, t.sampler, probes[j].x, probes[j].n);
-        reaching += reaches[i];
-    }
+    for (std::size_t i = 0; i < c.lights.size(); ++i) reaching += reaches[i];
     if (reaching == 0) return;
     double running = 0;
     for (std::size_t i = 0; i < c.lights.size(); ++i) {
@@ -494,6 +538,42 @@ void PointLighting::Impl::mix_in_uniform(int k, const SurfacePoint* probes, int 
     }
     // The probabilities still sum to 1 (up to rounding): the CDF's end is exact.
     c.cdf.back() = 1.0;
+}
+
+// The anchor of the footprint being set up; its weights are kept while the
+// next footprints name the same anchor (a block's texels, shaded in a row).
+void PointLighting::Impl::set_anchor(const Footprint* footprint) {
+    Footprint::Anchor a;
+    anchor_ = nullptr;
+    if (!footprint || !footprint->table_anchor(a)) return;
+    for (AnchorWeights& slot : anchors_) {
+        const Footprint::Anchor& kept = slot.anchor;
+        if (slot.used && kept.id == a.id && kept.at.x.x == a.at.x.x &&
+            kept.at.x.y == a.at.x.y && kept.at.x.z == a.at.x.z && kept.at.n.x == a.at.n.x &&
+            kept.at.n.y == a.at.n.y && kept.at.n.z == a.at.n.z) {
+            anchor_ = &slot;
+            return;
+        }
+    }
+    anchor_ = &anchors_[next_anchor_slot_];
+    next_anchor_slot_ = (next_anchor_slot_ + 1) % kAnchorSlots;
+    anchor_->used = true;
+    anchor_->anchor = a;
+    anchor_->irradiance.assign(p_.integrated.size(), std::numeric_limits<double>::quiet_NaN());
+}
+
+// The `unoccluded` weight of integrated light i for a footprint whose centre
+// it reaches: its unoccluded irradiance at the anchor when it reaches that,
+// else at the centre. A function of the anchor and the centre only, so every
+// pass and thread makes the same table.
+double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& centre) {
+    const Light& light = p_.scene.lights()[p_.integrated[i]];
+    if (anchor_) {
+        double& w = anchor_->irradiance[i];
+        if (std::isnan(w)) w = unoccluded_irradiance(light, anchor_->anchor.at.x, anchor_->anchor.at.n);
+        if (w > 0) return w;
+    }
+    return unoccluded_irradiance(light, centre.x, centre.n);
 }
 
 std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
@@ -658,7 +738,7 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     return it->second;
 }
 
-void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footprint* footprint,
+void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footprint,
                                         Active& active) {
     // Light choice (which lights, with what probability) is made once per
     // point and kept for every sample of the footprint: per-point tables over
@@ -669,17 +749,14 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
     // which is what technique_pdf evaluates, so the combination stays
     // unbiased; a light that applies nowhere it was probed is left to the
     // other techniques there.
-    SurfacePoint probes[5] = {centre, centre, centre, centre, centre};
-    int n_probes = 1;
-    if (footprint)
-        for (double u : {0.0, 1.0})
-            for (double v : {0.0, 1.0}) probes[n_probes++] = footprint->at(u, v);
+    const int n_probes = probes.count();
+    set_anchor(footprint);
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
         if (!t.bsdf) {
             bool reaches = false;
             if (footprint && !p_.selector(t.selection))
-                reaches = choose_lights_over(k, probes, n_probes);
+                reaches = choose_lights_over(k, probes);
             else
                 for (int i = 0; i < n_probes && !reaches; ++i)
                     reaches = choose_lights(k, probes[i].x, probes[i].n);
@@ -695,15 +772,21 @@ void PointLighting::Impl::choose_active(const SurfacePoint& centre, const Footpr
 // The ball about the centre through the footprint's farthest corner holds
 // the whole footprint where it is flat (a parallelogram); a sample outside
 // it (a footprint bent over a crease) is drawn for its own position.
-void PointLighting::Impl::set_region(const SurfacePoint& centre, const Footprint* footprint) {
+// Only selectors draw with it: without them the corners are not made here.
+void PointLighting::Impl::set_region(Probes& probes) {
+    const SurfacePoint& centre = probes[0];
     region_ = {centre.x, centre.n, 0.0};
-    if (!footprint) return;
+    if (probes.count() == 1) return;
+    bool selectors = false;
+    for (int k : p_.techniques)
+        selectors = selectors || (!p_.settings.techniques[k].bsdf &&
+                                  p_.selector(p_.settings.techniques[k].selection));
+    if (!selectors) return;
     double r2 = 0;
-    for (double u : {0.0, 1.0})
-        for (double v : {0.0, 1.0}) {
-            const Vec3 d = footprint->at(u, v).x - centre.x;
-            r2 = std::max(r2, dot(d, d));
-        }
+    for (int j = 1; j < probes.count(); ++j) {
+        const Vec3 d = probes[j].x - centre.x;
+        r2 = std::max(r2, dot(d, d));
+    }
     region_.radius = std::sqrt(r2);
 }
 
@@ -723,14 +806,15 @@ LightSelector::Receiver PointLighting::Impl::receiver_at(const Vec3& x, const Ve
 
 void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
                                      const Footprint* footprint, Active& active) {
-    set_region(centre, footprint);
+    Probes probes(centre, footprint);
+    set_region(probes);
     TexelTables& kept = p_.texel_tables;
     if (keep)
         if (const TexelTables::Entry* entry = kept.find(stream)) {
             restore(*entry, active);
             return;
         }
-    choose_active(centre, footprint, active);
+    choose_active(probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
     entry.mask = active.mask;

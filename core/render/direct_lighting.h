@@ -127,6 +127,19 @@ class Footprint {
 public:
     virtual ~Footprint() = default;
     virtual SurfacePoint at(double u, double v) const = 0;
+
+    // Where the `unoccluded` weights of a light table (a light's unoccluded
+    // irradiance, costly for spread and round lights) may be measured instead
+    // of at the footprint's centre: a point near it that neighbouring
+    // footprints share (a bake's block of texels on one triangle), named by
+    // `id`, so they share one measurement. Any positive weight keeps the
+    // combination unbiased; a light that does not reach the anchor is weighed
+    // at the centre as before. false: no anchor (every weight at the centre).
+    struct Anchor {
+        std::uint64_t id = 0;
+        SurfacePoint at;
+    };
+    virtual bool table_anchor(Anchor&) const { return false; }
 };
 
 // The most independently randomized streams a point's rounds may be dealt to

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace omis {
@@ -42,16 +43,30 @@ public:
     TexelTables(const TexelTables&) = delete;
     TexelTables& operator=(const TexelTables&) = delete;
 
+    // Points (streams) 0 … count − 1 get a slot each in an array instead of
+    // a node of the hash map: no hashing, no node to allocate, a cheap
+    // clear — a bake's first pass keeps every texel's entry. Only while the
+    // array stays within a quarter of the byte budget (else the map, which
+    // holds only the points that keep something). Call before any keep.
+    void index_points(std::size_t count);
     // The entry kept for `texel`, or null.
     const Entry* find(std::uint64_t texel) const;
     // Keeps `entry` for `texel` unless one is kept already or the budget is
     // spent.
     void keep(std::uint64_t texel, Entry&& entry);
     std::size_t bytes() const { return bytes_.load(std::memory_order_relaxed); }
-    std::size_t size() const { return entries_.size(); }
+    std::size_t size() const { return entries_.size() + indexed_kept_.load(std::memory_order_relaxed); }
 
 private:
     static std::size_t bytes_of(const Entry& entry);
+    bool reserve(std::size_t size);
+    struct Slot {
+        std::atomic<bool> kept{false};
+        Entry entry;
+    };
+    std::unique_ptr<Slot[]> indexed_;
+    std::size_t indexed_count_ = 0;
+    std::atomic<std::size_t> indexed_kept_{0};
     tbb::concurrent_unordered_map<std::uint64_t, Entry> entries_;
     std::atomic<std::size_t> bytes_{0};
     std::size_t budget_;

@@ -3,6 +3,7 @@
 // techniques and light tables anew, and the store must keep to its budget.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cstring>
 #include <vector>
 
@@ -121,4 +122,99 @@ TEST_CASE("texel tables: the store keeps to its byte budget", "[texel_tables]") 
     again.keep(7, entry());  // kept already: neither replaced nor counted twice
     CHECK(again.size() == 1);
     CHECK(again.bytes() == one);
+}
+
+TEST_CASE("texel tables: indexed points keep, find and budget as the map does",
+          "[texel_tables]") {
+    TexelTables::Entry e;
+    e.mask = 5;
+    e.tables.push_back({2, {0, 1}, {0.75, 0.25}});
+    TexelTables store;
+    store.index_points(10);
+    const std::size_t empty = store.bytes();
+    CHECK(store.find(3) == nullptr);
+    TexelTables::Entry copy = e;
+    store.keep(3, std::move(copy));
+    REQUIRE(store.find(3) != nullptr);
+    CHECK(store.find(3)->mask == 5);
+    CHECK(store.find(3)->tables[0].probability[0] == 0.75);
+    CHECK(store.bytes() > empty);
+    const std::size_t one = store.bytes();
+    copy = e;
+    store.keep(3, std::move(copy));  // kept already
+    CHECK(store.bytes() == one);
+    copy = e;
+    store.keep(12, std::move(copy));  // past the indexed points: the map
+    CHECK(store.find(12) != nullptr);
+    CHECK(store.size() == 2);
+}
+
+namespace {
+
+// A SquareFootprint whose light tables are weighed at a shared anchor.
+class AnchoredFootprint : public SquareFootprint {
+public:
+    AnchoredFootprint(const Vec3& centre, double half, std::uint64_t id, const Vec3& anchor)
+        : SquareFootprint(centre, half), id_(id), anchor_(anchor) {}
+    bool table_anchor(Anchor& a) const override {
+        a.id = id_;
+        a.at = SurfacePoint{anchor_, Vec3(0, 0, 1), Vec3(0, 0, 1)};
+        return true;
+    }
+
+private:
+    std::uint64_t id_;
+    Vec3 anchor_;
+};
+
+}  // namespace
+
+// Footprint::table_anchor: a texel's `unoccluded` weights come from its
+// anchor, whichever texels were shaded before it (the weights kept per
+// thread for recent anchors must never leak into another anchor's texels).
+TEST_CASE("texel tables: anchored weights depend on the anchor, not on the order of texels",
+          "[texel_tables]") {
+    Scene scene;
+    add_spread_scene(scene);
+    const DirectLightingSettings s = settings_with(Strategy::OptimalDirect);
+    // Two anchors under the spread disk and one under the ellipse; the
+    // texels of each, and a texel whose anchor no light reaches the same
+    // way (the rim of the spread rect's reach).
+    const Vec3 a0(0, -0.4, 0), a1(0.3, 0.5, 0), a2(-0.7, 0.4, 0);
+    const std::vector<AnchoredFootprint> texels = {
+        {Vec3(0.02, -0.38, 0), 0.01, 0, a0}, {Vec3(0.05, -0.42, 0), 0.01, 0, a0},
+        {Vec3(0.32, 0.52, 0), 0.01, 1, a1},  {Vec3(0.27, 0.47, 0), 0.01, 1, a1},
+        {Vec3(-0.66, 0.44, 0), 0.01, 2, a2}, {Vec3(-0.3, 0.9, 0), 0.05, 2, a2},
+    };
+    // Each texel alone (a fresh shader: nothing kept from another texel),
+    // against all texels in a row through one shader, forward and backward.
+    std::vector<std::array<double, 3>> alone(texels.size());
+    for (std::size_t t = 0; t < texels.size(); ++t) {
+        LightingContext context(scene, s);
+        PointLighting shader(context);
+        shader.shade(t, 0, 4, texels[t].centre(), &texels[t], alone[t].data(), nullptr);
+    }
+    for (bool backward : {false, true}) {
+        LightingContext context(scene, s);
+        PointLighting shader(context);
+        for (std::size_t j = 0; j < texels.size(); ++j) {
+            const std::size_t t = backward ? texels.size() - 1 - j : j;
+            double v[3];
+            shader.shade(t, 0, 4, texels[t].centre(), &texels[t], v, nullptr);
+            INFO("texel " << t << (backward ? " (backward)" : " (forward)"));
+            CHECK(same_bits(v, alone[t].data()));
+        }
+    }
+    // The anchor is what the weights come from: the same texel under another
+    // anchor gets another table (values differ), under no anchor too.
+    // Same stream (the same draws), fresh contexts: only the table differs.
+    const SquareFootprint plain(Vec3(0.02, -0.38, 0), 0.01);
+    const AnchoredFootprint moved(Vec3(0.02, -0.38, 0), 0.01, 7, Vec3(0.4, -0.9, 0));
+    double v_plain[3], v_moved[3];
+    LightingContext c_plain(scene, s), c_moved(scene, s);
+    PointLighting(c_plain).shade(0, 0, 4, plain.centre(), &plain, v_plain, nullptr);
+    PointLighting(c_moved).shade(0, 0, 4, moved.centre(), &moved, v_moved, nullptr);
+    CHECK_FALSE(same_bits(v_plain, alone[0].data()));
+    CHECK_FALSE(same_bits(v_moved, alone[0].data()));
+    CHECK_FALSE(same_bits(v_moved, v_plain));
 }
