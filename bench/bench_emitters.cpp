@@ -14,7 +14,8 @@
 // target is at most 2× from 16 to 100k emitters.
 //
 // Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
-// (only the scenes of N emitters: for profiling one scene).
+// (only the scenes of N emitters: for profiling one scene), --reps N
+// (repetitions, 5 unless given: more for a profile).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -155,13 +156,16 @@ int main(int argc, char** argv) {
     bool quick = false;
     std::string only;  // --only FAMILY: time one family (for profiling)
     int only_emitters = 0;  // --emitters N: only scenes of N emitters
+    int reps = 5;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
         else if (std::strcmp(argv[i], "--emitters") == 0 && i + 1 < argc)
             only_emitters = std::atoi(argv[++i]);
+        else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc)
+            reps = std::max(1, std::atoi(argv[++i]));
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N]\n",
                          argv[0]);
             return 2;
         }
@@ -190,7 +194,7 @@ int main(int argc, char** argv) {
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every
     // scene alike rather than all of one scene.
-    for (int rep = 0; rep < 5; ++rep)
+    for (int rep = 0; rep < reps; ++rep)
         for (auto& t : scenes) t->shade_all();
 
     std::printf("time per texel-sample, one thread, %d receivers, 4 rounds of the default techniques\n",

@@ -550,7 +550,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     // One analytic light: an occlusion ray up to it. Otherwise one closest-hit
     // ray decides for every light along w, and a hit on an emitting triangle
     // (or at its depth, on a coplanar neighbour) does not shadow it.
-    std::optional<omis::Hit> blocker;
+    std::optional<RayHit> blocker;
     bool single_blocked = false;
     const bool single = hits_.size() == 1 && only_analytic;
     if (need_rays) {
@@ -558,7 +558,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         if (single)
             single_blocked = geometry.occluded(origin, w, 0, hits_[0].emitted.distance - offset);
         else
-            blocker = geometry.intersect(origin, w, 0, std::numeric_limits<double>::infinity());
+            blocker = geometry.closest_hit(origin, w, 0, std::numeric_limits<double>::infinity());
     }
     auto visible = [&](const Hit& h) {
         const Light& light = p_.scene.lights()[h.light];
