@@ -585,7 +585,9 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
     if (const LightSelector* s = p_.selector(t.selection)) {
-        // Only lights along w have a density there.
+        // Only lights along w have a density there. Their pmf records are
+        // read while their shapes' densities are computed.
+        for (std::uint32_t l : lights_along(x, w)) s->prefetch(l);
         double pdf = 0;
         const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
         const std::vector<std::uint32_t>& along = along_.lights;
