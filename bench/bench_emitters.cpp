@@ -14,7 +14,10 @@
 // target is at most 2× from 16 to 100k emitters.
 //
 // Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
-// (only the scenes of N emitters: for profiling one scene).
+// (only the scenes of N emitters: for profiling one scene), --reps N
+// (repetitions, 5 unless given: more for a profile), --texels (each receiver
+// spreads its samples over its grid cell, as a bake's texel does: every
+// sample at its own position), --rounds N (4 unless given).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -110,14 +113,26 @@ struct Timed {
     std::vector<Vec3> points;
     double setup_ms = 0, best = 1e300;  // best: fastest shading of every receiver (s)
 
+    // A receiver's grid cell on the floor (--texels).
+    struct Cell : Footprint {
+        Vec3 centre;
+        double side = 0;
+        SurfacePoint at(double u, double v) const override {
+            const Vec3 n(0, 0, 1);
+            return {centre + Vec3((u - 0.5) * side, (v - 0.5) * side, 0), n, n};
+        }
+    };
+    bool texels = false;
+    double cell = 0;
+
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
-          int grid)
-        : family(std::move(family_)), emitters(emitters_) {
+          int grid, bool texels_, int rounds)
+        : family(std::move(family_)), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
         add_floor(scene);
         build(scene);
         scene.commit();
         default_techniques(scene, settings.techniques, settings.samples);
-        settings.rounds = 4;
+        settings.rounds = rounds;
         for (int j = 0; j < grid; ++j)
             for (int i = 0; i < grid; ++i)
                 points.emplace_back(-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0);
@@ -134,8 +149,16 @@ struct Timed {
         double value[3], variance[3];
         const Vec3 n(0, 0, 1);
         const double start = cpu_seconds();
-        for (std::size_t i = 0; i < points.size(); ++i)
-            shader->shade(i, 0, settings.rounds, points[i], n, n, value, variance);
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            if (!texels) {
+                shader->shade(i, 0, settings.rounds, points[i], n, n, value, variance);
+                continue;
+            }
+            Cell footprint;
+            footprint.centre = points[i];
+            footprint.side = cell;
+            shader->shade(i, 0, settings.rounds, {points[i], n, n}, &footprint, value, variance);
+        }
         best = std::min(best, cpu_seconds() - start);
     }
 
@@ -155,13 +178,20 @@ int main(int argc, char** argv) {
     bool quick = false;
     std::string only;  // --only FAMILY: time one family (for profiling)
     int only_emitters = 0;  // --emitters N: only scenes of N emitters
+    int reps = 5, rounds = 4;
+    bool texels = false;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
         else if (std::strcmp(argv[i], "--emitters") == 0 && i + 1 < argc)
             only_emitters = std::atoi(argv[++i]);
+        else if (std::strcmp(argv[i], "--reps") == 0 && i + 1 < argc)
+            reps = std::max(1, std::atoi(argv[++i]));
+        else if (std::strcmp(argv[i], "--rounds") == 0 && i + 1 < argc)
+            rounds = std::max(1, std::atoi(argv[++i]));
+        else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N] [--texels] [--rounds N]\n",
                          argv[0]);
             return 2;
         }
@@ -178,23 +208,24 @@ int main(int argc, char** argv) {
         if (wanted("sphere", 2 * slices * (stacks - 1)))
             scenes.push_back(std::make_unique<Timed>(
                 "emissive sphere", 2 * slices * (stacks - 1),
-                [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid));
+                [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds));
     for (int side : {1, 4, 16, 100})
         if (wanted("point", side * side))
             scenes.push_back(std::make_unique<Timed>(
-                "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid));
+                "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds));
     for (int side : {1, 4, 16, 100})
         if (wanted("area", side * side))
             scenes.push_back(std::make_unique<Timed>(
-                "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid));
+                "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds));
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every
     // scene alike rather than all of one scene.
-    for (int rep = 0; rep < 5; ++rep)
+    for (int rep = 0; rep < reps; ++rep)
         for (auto& t : scenes) t->shade_all();
 
-    std::printf("time per texel-sample, one thread, %d receivers, 4 rounds of the default techniques\n",
-                grid * grid);
+    std::printf("time per texel-sample, one thread, %d receivers%s, %d rounds of the default "
+                "techniques\n", grid * grid, texels ? " (texels: samples over each cell)" : "",
+                rounds);
     std::printf("%-16s %9s %12s %8s %9s  %s\n", "scene", "emitters", "us/sample", "growth",
                 "setup ms", "techniques");
     double base = 0;

@@ -657,7 +657,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     // One analytic light: an occlusion ray up to it. Otherwise one closest-hit
     // ray decides for every light along w, and a hit on an emitting triangle
     // (or at its depth, on a coplanar neighbour) does not shadow it.
-    std::optional<omis::Hit> blocker;
+    std::optional<RayHit> blocker;
     bool single_blocked = false;
     const bool single = hits_.size() == 1 && only_analytic;
     if (need_rays) {
@@ -665,7 +665,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         if (single)
             single_blocked = geometry.occluded(origin, w, 0, hits_[0].emitted.distance - offset);
         else
-            blocker = geometry.intersect(origin, w, 0, std::numeric_limits<double>::infinity());
+            blocker = geometry.closest_hit(origin, w, 0, std::numeric_limits<double>::infinity());
     }
     auto visible = [&](const Hit& h) {
         const Light& light = p_.scene.lights()[h.light];
@@ -692,7 +692,9 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
     if (const LightSelector* s = p_.selector(t.selection)) {
-        // Only lights along w have a density there.
+        // Only lights along w have a density there. Their pmf records are
+        // read while their shapes' densities are computed.
+        for (std::uint32_t l : lights_along(x, w)) s->prefetch(l);
         double pdf = 0;
         const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
         const std::vector<std::uint32_t>& along = along_.lights;

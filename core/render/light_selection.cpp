@@ -311,6 +311,7 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
     if (depth >= 32) throw std::length_error("light tree: deeper than 32 wide levels");
     const std::uint32_t index = std::uint32_t(wide_.size());
     wide_.emplace_back();
+    links_.emplace_back();
     std::uint32_t members[kWidth];
     int count = 0;
     if (nodes_[binary].light != ~0u) {
@@ -330,15 +331,15 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
         const std::uint64_t path = trail | (std::uint64_t(i) << (2 * depth));
         wide_[index].set(i, member.bounds);
         if (member.light != ~0u) {
-            wide_[index].index[i] = member.light;
-            wide_[index].is_leaf |= std::uint8_t(1u << i);
+            links_[index].index[i] = member.light;
+            links_[index].is_leaf |= std::uint8_t(1u << i);
             per_light_[member.light].trail = path;
         } else {
             const std::uint32_t below = collapse(members[i], path, depth + 1);
-            wide_[index].index[i] = below;  // wide_ may have moved: index anew
+            links_[index].index[i] = below;  // links_ may have moved: index anew
         }
     }
-    wide_[index].count = std::uint8_t(count);
+    links_[index].count = std::uint8_t(count);
     return index;
 }
 
@@ -417,19 +418,21 @@ void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, double gr
     std::memcpy(out, &value, sizeof value);
 }
 
-void LightSelector::child_probabilities(const WideNode& node, const Receiver& at,
+void LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
                                         double p[kWidth]) const {
+    const WideNode& node = wide_[index];
+    const int count = links_[index].count;
     float importance[kWidth];
     node.importance(at.x, at.n, at.radius, importance);
     double total = 0;
-    for (int i = 0; i < node.count; ++i) total += p[i] = double(importance[i]);
+    for (int i = 0; i < count; ++i) total += p[i] = double(importance[i]);
     if (!(total > 0)) {
         // The parent's looser bounds reached (x, n) but no child's do: no
         // light below can add anything; split by power (all are positive).
         total = 0;
-        for (int i = 0; i < node.count; ++i) total += p[i] = double(node.power[i]);
+        for (int i = 0; i < count; ++i) total += p[i] = double(node.power[i]);
     }
-    for (int i = 0; i < node.count; ++i) p[i] /= total;
+    for (int i = 0; i < count; ++i) p[i] /= total;
 }
 
 void LightSelector::focus(Memo& memo, const Receiver& at) const {
@@ -454,21 +457,20 @@ void LightSelector::focus(Memo& memo, const Receiver& at) const {
     memo.root_reaches = !wide_.empty() && root_.importance(x, n, at.radius) > 0;
 }
 
-const double* LightSelector::child_probabilities(const WideNode& node, const Receiver& at,
+const double* LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
                                                  Memo* memo, double scratch[kWidth]) const {
     if (!memo) {
-        child_probabilities(node, at, scratch);
+        child_probabilities(index, at, scratch);
         return scratch;
     }
     // The memo is focused on (x, n): sample and pmf call root_reaches first.
-    const auto index = std::uint32_t(&node - wide_.data());
     // Fibonacci hashing spreads the depth-first indices of one path.
     static_assert(Memo::kSlots == 1u << 11, "the hash's shift");
     Memo::Entry& e = memo->slots[(index * 2654435769u) >> (32 - 11)];
     if (e.stamp != memo->stamp || e.node != index) {
         e.node = index;
         e.stamp = memo->stamp;
-        child_probabilities(node, at, e.p);
+        child_probabilities(index, at, e.p);
     }
     return e.p;
 }
@@ -507,24 +509,25 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
     if (pick < unbounded_.size()) return SelectedLight{unbounded_[pick], 1.0 / double(choices)};
     double pmf = 1.0 / double(choices);
     u = std::min(u * double(choices) - double(pick), std::nextafter(1.0, 0.0));
-    const WideNode* node = &wide_[0];
+    std::uint32_t node = 0;
     double scratch[kWidth];
     for (;;) {
-        const double* p = child_probabilities(*node, at, memo, scratch);
+        const double* p = child_probabilities(node, at, memo, scratch);
+        const WideLinks& links = links_[node];
         // The child whose share of [0, 1) holds u; rounding past the last
         // share falls to the last child that has one.
         int i = 0;
         double below = 0;
-        while (i + 1 < node->count && !(u < below + p[i] && p[i] > 0)) below += p[i++];
+        while (i + 1 < links.count && !(u < below + p[i] && p[i] > 0)) below += p[i++];
         while (!(p[i] > 0) && i > 0) below -= p[--i];
         u = std::clamp((u - below) / p[i], 0.0, std::nextafter(1.0, 0.0));
         pmf *= p[i];
-        if (node->is_leaf & (1u << i)) {
+        if (links.is_leaf & (1u << i)) {
             if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
-            if (memo) memo->drawn = node->index[i], memo->drawn_pmf = pmf;
-            return SelectedLight{node->index[i], pmf};
+            if (memo) memo->drawn = links.index[i], memo->drawn_pmf = pmf;
+            return SelectedLight{links.index[i], pmf};
         }
-        node = &wide_[node->index[i]];
+        node = links.index[i];
     }
 }
 
@@ -540,14 +543,15 @@ double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) c
     if (!tree) return 0;
     if (memo && memo->drawn == light) return memo->drawn_pmf;  // the same product
     double pmf = 1.0 / double(choices);
-    const WideNode* node = &wide_[0];
+    std::uint32_t node = 0;
     double scratch[kWidth];
     for (int level = 0; pmf > 0; ++level) {
         const int i = int((l.trail >> (2 * level)) & 3);
-        if (i >= node->count) return 0;  // a light of zero power: not in the tree
-        pmf *= child_probabilities(*node, at, memo, scratch)[i];
-        if (node->is_leaf & (1u << i)) return node->index[i] == light ? pmf : 0.0;
-        node = &wide_[node->index[i]];
+        const WideLinks& links = links_[node];
+        if (i >= links.count) return 0;  // a light of zero power: not in the tree
+        pmf *= child_probabilities(node, at, memo, scratch)[i];
+        if (links.is_leaf & (1u << i)) return links.index[i] == light ? pmf : 0.0;
+        node = links.index[i];
     }
     return 0;
 }

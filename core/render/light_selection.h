@@ -97,6 +97,11 @@ public:
         return pmf(Receiver{x, n, 0.0}, light, memo);
     }
     double pmf(const Receiver& at, std::uint32_t light, Memo* memo = nullptr) const;
+    // A hint that pmf(…, light) follows soon: starts reading what it needs
+    // (among 100k lights, a cache miss) while the caller works on.
+    void prefetch(std::uint32_t light) const {
+        if (light < per_light_.size()) __builtin_prefetch(&per_light_[light]);
+    }
 
     // What the tree bounds: an axis-aligned box, the power inside, and the
     // cone of emission directions (axis, half-angle θo, plus θe, how far past
@@ -148,28 +153,33 @@ private:
     // step down reads one contiguous block and evaluates four independent
     // importances, and a draw among 100k lights takes 9 steps instead of 17.
     static constexpr int kWidth = 4;
-    struct WideNode {
+    struct alignas(64) WideNode {
         // The children's PackedBounds field by field, one lane each, so that
-        // importance() evaluates the four at once.
+        // importance() evaluates the four at once: three cache lines.
         float cx[kWidth] = {}, cy[kWidth] = {}, cz[kWidth] = {}, radius[kWidth] = {},
               power[kWidth] = {}, ax[kWidth] = {}, ay[kWidth] = {}, az[kWidth] = {},
               cos_theta_o[kWidth] = {}, sin_theta_o[kWidth] = {}, cos_theta_e[kWidth] = {},
               two_sided[kWidth] = {};  // 1 or 0
-        std::uint32_t index[kWidth] = {};  // wide node, or light id where is_leaf
-        std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
         void set(int i, const PackedBounds& b);
         // PackedBounds::importance of each child in single precision (0 past
         // count, and never 0 where a child's bounds reach (x, n)).
         void importance(const Vec3& x, const Vec3& n, double grow, float out[kWidth]) const;
+    };
+    // Where a wide node's children lead, apart from their bounds: a step down
+    // whose probabilities a memo holds reads only these 20 bytes (three
+    // nodes to a cache line) instead of the bounds' three lines.
+    struct WideLinks {
+        std::uint32_t index[kWidth] = {};     // wide node, or light id where is_leaf
+        std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
     };
     std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
     // The probability of each child of a wide node: ∝ the children's
     // importance, or ∝ their power where none's bounds reach (x, n) although
     // the parent's did, so that every draw ends at a light and the pmfs sum
     // to 1.
-    void child_probabilities(const WideNode& node, const Receiver& at, double p[kWidth]) const;
+    void child_probabilities(std::uint32_t node, const Receiver& at, double p[kWidth]) const;
     // The same through a memo focused on `at` (root_reaches does so).
-    const double* child_probabilities(const WideNode& node, const Receiver& at, Memo* memo,
+    const double* child_probabilities(std::uint32_t node, const Receiver& at, Memo* memo,
                                       double scratch[kWidth]) const;
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
@@ -194,6 +204,7 @@ private:
     std::vector<Node> nodes_;           // binary, while building
     std::vector<Bounds> build_bounds_;  // per binary node, while building
     std::vector<WideNode> wide_;        // the root first
+    std::vector<WideLinks> links_;      // per wide node
     PackedBounds root_;
     std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
 };

@@ -340,8 +340,14 @@ bool GeometryScene::occluded(const Vec3& origin, const Vec3& direction, double t
     return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }
 
-std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& direction,
-                                            double tmin, double tmax) const {
+std::optional<RayHit> GeometryScene::closest_hit(const Vec3& origin, const Vec3& direction,
+                                                 double tmin, double tmax) const {
+    return closest_hit(origin, direction, tmin, tmax, nullptr);
+}
+
+std::optional<RayHit> GeometryScene::closest_hit(const Vec3& origin, const Vec3& direction,
+                                                 double tmin, double tmax,
+                                                 Vec3* embree_normal) const {
     require_committed("intersect");
     if (!has_occluders()) return std::nullopt;
     RTCRayHit rh;
@@ -354,17 +360,31 @@ std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& dire
     rtcIntersect1(scene_, &ctx, &rh);
     count_rays(1);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-
-    const Mesh& m = meshes_[rh.hit.geomID];
-    Hit hit;
+    if (embree_normal) *embree_normal = Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
+    RayHit hit;
     hit.t = rh.ray.tfar;
     hit.mesh = rh.hit.geomID;
     hit.triangle = rh.hit.primID;
     hit.b1 = rh.hit.u;
     hit.b2 = rh.hit.v;
+    return hit;
+}
+
+std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& direction,
+                                            double tmin, double tmax) const {
+    Vec3 embree_normal;
+    const auto h = closest_hit(origin, direction, tmin, tmax, &embree_normal);
+    if (!h) return std::nullopt;
+    const Mesh& m = meshes_[h->mesh];
+    Hit hit;
+    hit.t = h->t;
+    hit.mesh = h->mesh;
+    hit.triangle = h->triangle;
+    hit.b1 = h->b1;
+    hit.b2 = h->b2;
     hit.geometric_normal = m.geometric_normal(hit.triangle);
     if (length(hit.geometric_normal) == 0.0)  // degenerate in double, not in float
-        hit.geometric_normal = normalize(Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z});
+        hit.geometric_normal = normalize(embree_normal);
     hit.position = m.position(hit.triangle, hit.b1, hit.b2);
     return hit;
 }

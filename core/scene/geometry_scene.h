@@ -95,6 +95,15 @@ struct EmissiveTriangle {
     std::uint32_t mesh = 0, triangle = 0;
 };
 
+// What a closest-hit query finds, without reading the mesh (a shadow test
+// needs no more; Hit adds the surface, a cache miss among many triangles).
+struct RayHit {
+    double t = 0;                  // distance along the ray, in units of |direction|
+    std::uint32_t mesh = 0;        // id returned by add_mesh
+    std::uint32_t triangle = 0;    // index into the mesh's triangles
+    double b1 = 0, b2 = 0;         // barycentrics of vertices 1 and 2 (Embree's u, v)
+};
+
 struct Hit {
     double t = 0;                  // distance along the ray, in units of |direction|
     std::uint32_t mesh = 0;        // id returned by add_mesh
@@ -149,6 +158,9 @@ public:
     // The closest hit with t in [tmin, tmax], if any. Thread-safe after commit().
     std::optional<Hit> intersect(const Vec3& origin, const Vec3& direction,
                                  double tmin, double tmax) const;
+    // The same hit without its surface (normal, position).
+    std::optional<RayHit> closest_hit(const Vec3& origin, const Vec3& direction,
+                                      double tmin, double tmax) const;
     // occluded() for many rays at once (Embree's stream API); out[i] = occluded.
     void occluded(const Ray* rays, std::size_t count, bool* out) const;
 
@@ -169,6 +181,9 @@ private:
     // Hands Embree its single-precision copy of a validated mesh, as geometry `id`.
     void attach_to_embree(const Mesh& mesh, std::uint32_t id, const std::string& who);
     void require_committed(const char* what) const;
+    // closest_hit, and Embree's (unnormalised) geometric normal of the hit.
+    std::optional<RayHit> closest_hit(const Vec3& origin, const Vec3& direction, double tmin,
+                                      double tmax, Vec3* embree_normal) const;
     void count_rays(std::uint64_t n) const;
 
     std::shared_ptr<Device> device_;
