@@ -169,6 +169,12 @@ private:
     std::vector<double> stream_sums_;
     int stream_stride() const { return C_ + N_ + 1; }
     void progressive_estimate(MisResult& out) const;
+    // The level test's halves (level_scale in estimator.cpp), levels
+    // 1, 2, ... while 2^level ≤ rounds: per level, channel c's balance sum
+    // over its first half less its second into D[l], and the same of
+    // Σ p_k/q into c_diff[l*N + k] when given. Returns the levels.
+    static constexpr int kMaxLevels = 32;
+    int level_differences(int c, double* D, double* c_diff) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};
 };
