@@ -208,6 +208,31 @@ void MisEstimator::stream_estimates(int s, const double* beta, double* balance,
     }
 }
 
+void MisEstimator::stream_cross_fit(int s, double* balance, double* corrected) const {
+    stream_estimates(s, nullptr, balance);
+    for (int c = 0; c < C_; ++c) corrected[c] = balance[c];
+    const double* sums = &stream_sums_[s * stream_stride()];
+    const double own_rounds = sums[C_ + N_], rest_rounds = rounds_ - own_rounds;
+    if (!stream_moments() || !(rest_rounds > 0)) return;
+    // The other streams' moments: the whole's less this stream's, per round.
+    const double* own_a = sums + C_ + N_ + 1;
+    const double* own_b = own_a + N_ * N_;
+    const double* own_m = own_b + N_ * C_;
+    Moments rest;
+    for (int i = 0; i < N_; ++i)
+        for (int j = i; j < N_; ++j)
+            rest.a[i * N_ + j] = rest.a[j * N_ + i] =
+                (a()[i * N_ + j] - own_a[i * N_ + j]) / rest_rounds;
+    for (int i = 0; i < N_ * C_; ++i) rest.b[i] = (b()[i] - own_b[i]) / rest_rounds;
+    for (int c = 0; c < C_; ++c) rest.m[c] = (m()[c] - own_m[c]) / rest_rounds;
+    // Applied to other samples, as optimal-progressive's epochs: its rule.
+    const SolveResult solved = solve_optimal_alpha(
+        N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
+        rest_rounds * samples_per_round_, kProgressiveSamplesPerCoefficient);
+    for (int c = 0; c < C_; ++c)
+        corrected[c] += correction(solved.alpha.data(), c, sums + C_, own_rounds);
+}
+
 double heuristic_weight(Strategy strategy, const StrategyOptions& options, int N,
                         const int* counts, const double* pdfs, int t) {
     // q_k = n_k p_k relative to the largest, so neither the products (pdfs
@@ -303,8 +328,14 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
         double* m = b + N_ * C_;
         moment_kernel_(N_, C_, r, fq, a, m + C_, b, m);
         if (streams_ > 0) {
-            double* stream_c = &stream_sums_[stream_ * stream_stride() + C_];
-            for (int k = 0; k < N_; ++k) stream_c[k] += r[k];
+            double* stream = &stream_sums_[stream_ * stream_stride()];
+            double* stream_c = stream + C_;
+            if (stream_moments()) {  // a, b, m after the rounds entry; c as before
+                double* sa = stream_c + N_ + 1;
+                moment_kernel_(N_, C_, r, fq, sa, stream_c, sa + N_ * N_, sa + N_ * N_ + N_ * C_);
+            } else {
+                for (int k = 0; k < N_; ++k) stream_c[k] += r[k];
+            }
         }
     }
 
