@@ -393,7 +393,7 @@ void MisEstimator::finish_round() {
     if (streams_ > 0) stream_sums_[stream_ * stream_stride() + C_ + N_] += 1;
     std::fill(in_round_.begin(), in_round_.end(), 0);
     round_left_ = samples_per_round_;
-    if (!is_optimal(strategy_)) return;
+    if (strategy_ != Strategy::OptimalProgressive && !options_.sequence_rounds) return;
     // The running sums after rounds 1, 2, 4, 8, ...: the level test's halves
     // (level_scale) and optimal-progressive's epochs (progressive_estimate).
     if ((rounds_ & (rounds_ - 1)) != 0) return;
@@ -414,8 +414,13 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
     std::vector<double> total(moments(), moments() + block), epoch(block);
     const double *a_ = a(), *b_ = b(), *m_ = m();
     const int boundaries = int(snapshots_.size() / block);  // at rounds 1, 2, 4, ...
-    // Per epoch and channel: the correction summed over the epoch's rounds.
-    double epoch_sum[kMaxLevels + 1][kMaxMisChannels] = {};
+    // The level test (level_scale), per epoch from the rest's data alone: the
+    // levels below the epoch (rounds [0, 2^(e−1)) hold them all) and the
+    // epoch's own α, so its scale, like its α, is independent of the samples
+    // it corrects, and the estimate stays unbiased.
+    double D_all[kMaxLevels * kMaxMisChannels], c_diff[kMaxLevels * kMaxMisTechniques];
+    const int levels = level_differences(D_all, c_diff);
+    for (int c = 0; c < C_; ++c) out.estimate[c] = balance_estimate(c);
     int start = 0;
     for (int e = 0; e <= boundaries; ++e) {
         const int end = e < boundaries ? 1 << e : rounds_;
@@ -424,7 +429,8 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
         const double* lo = e > 0 ? &snapshots_[(e - 1) * block] : nullptr;
         for (std::size_t i = 0; i < block; ++i) epoch[i] = hi[i] - (lo ? lo[i] : 0.0);
         const int rest_rounds = rounds_ - (end - start);
-        if (rest_rounds > 0) {
+        const int below = std::min(levels, e - 1);  // levels within rounds [0, start)
+        if (rest_rounds > 0 && (below >= 2 || !options_.sequence_rounds)) {
             Moments rest;
             const double* ea = epoch.data();
             const double* eb = ea + N_ * N_;
@@ -439,45 +445,40 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
             const SolveResult solved = solve_optimal_alpha(
                 N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
                 Rr * samples_per_round_, kProgressiveSamplesPerCoefficient);
-            for (int c = 0; c < C_; ++c)
-                epoch_sum[e][c] =
-                    (end - start) * correction(solved.alpha.data(), c, ec, end - start);
+            const double share = double(end - start) / rounds_;
+            for (int c = 0; c < C_; ++c) {
+                double beta[kMaxMisTechniques * kMaxMisChannels], D[kMaxLevels], G[kMaxLevels];
+                if (!without_n(solved.alpha.data(), c, beta)) continue;
+                for (int l = 0; l < below; ++l) {
+                    D[l] = D_all[l * C_ + c];
+                    G[l] = 0;
+                    for (int k = 0; k < N_; ++k) G[l] += beta[k * C_ + c] * c_diff[l * N_ + k];
+                }
+                const double scale = options_.sequence_rounds ? level_scale(D, G, below) : 1.0;
+                out.estimate[c] +=
+                    scale * share * correction(solved.alpha.data(), c, ec, end - start);
+            }
             out.rank = std::max(out.rank, solved.rank);
         }
         start = end;
     }
-    // The level test on the cross-fit's own corrections: the halves of level
-    // L are epochs 0..L−1 and epoch L, so G_L = epoch L's sum less theirs.
-    for (int c = 0; c < C_; ++c) {
-        double D[kMaxLevels], G[kMaxLevels], total_correction = 0, before = 0;
-        const int levels = level_differences(c, D, nullptr);
-        for (int l = 0; l < levels; ++l) {
-            before += epoch_sum[l][c];
-            G[l] = epoch_sum[l + 1][c] - before;
-        }
-        for (int e = 0; e <= boundaries; ++e) total_correction += epoch_sum[e][c];
-        const double scale = total_correction != 0 ? level_scale(D, G, levels) : 0.0;
-        out.estimate[c] = balance_estimate(c) + scale * total_correction / rounds_;
-    }
 }
 
-int MisEstimator::level_differences(int c, double* D, double* c_diff) const {
+int MisEstimator::level_differences(double* D, double* c_diff) const {
     const std::size_t block = moments_size();
     const int levels = std::min(kMaxLevels, int(snapshots_.size() / block) - 1);
-    auto balance_sum = [&](const double* s) {  // Σ_i n_i b_i = Σ f/q
-        double sum = 0;
-        for (int i = 0; i < N_; ++i) sum += counts_[i] * s[N_ * N_ + i * C_ + c];
-        return sum;
-    };
+    const std::size_t at_b = N_ * N_, at_c = N_ * N_ + N_ * C_ + C_;
     for (int l = 0; l < levels; ++l) {
         // Level l + 1: rounds [0, n) are the snapshot at n, [n, 2n) the next less it.
         const double* first = &snapshots_[l * block];
         const double* both = &snapshots_[(l + 1) * block];
-        D[l] = 2 * balance_sum(first) - balance_sum(both);
-        if (!c_diff) continue;
-        const std::size_t at_c = N_ * N_ + N_ * C_ + C_;
-        for (int k = 0; k < N_; ++k)
-            c_diff[l * N_ + k] = 2 * first[at_c + k] - both[at_c + k];
+        for (int c = 0; c < C_; ++c) {  // balance sums: Σ_i n_i b_i = Σ f/q
+            double sum = 0;
+            for (int i = 0; i < N_; ++i)
+                sum += counts_[i] * (2 * first[at_b + i * C_ + c] - both[at_b + i * C_ + c]);
+            D[l * C_ + c] = sum;
+        }
+        for (int k = 0; k < N_; ++k) c_diff[l * N_ + k] = 2 * first[at_c + k] - both[at_c + k];
     }
     return std::max(0, levels);
 }
@@ -581,19 +582,21 @@ void MisEstimator::direct_estimate(MisResult& out) const {
     const double S = R * samples_per_round_, k = solved.free_coefficients;
     const double inflation = S / (S - k - 1) * (S - 2) / (S - k - 2);
     double* beta = out.alpha.data();  // α less its n-component
-    double D[kMaxLevels], G[kMaxLevels], c_diff[kMaxLevels * kMaxMisTechniques];
+    double D_all[kMaxLevels * kMaxMisChannels], c_diff[kMaxLevels * kMaxMisTechniques];
+    const int levels = level_differences(D_all, c_diff);
+    double D[kMaxLevels], G[kMaxLevels];
     for (int c = 0; c < C_; ++c) {
         const double balance = balance_estimate(c), balance_variance = heuristic_variance(c);
         out.estimate[c] = balance;
         out.variance[c] = balance_variance;
         if (!solved.kept[c] || !without_n(solved.alpha.data(), c, beta)) continue;
         // The level test: scale β to what the sequence's halves support.
-        const int levels = level_differences(c, D, c_diff);
         for (int l = 0; l < levels; ++l) {
+            D[l] = D_all[l * C_ + c];
             G[l] = 0;
             for (int k = 0; k < N_; ++k) G[l] += beta[k * C_ + c] * c_diff[l * N_ + k];
         }
-        const double scale = level_scale(D, G, levels);
+        const double scale = options_.sequence_rounds ? level_scale(D, G, levels) : 1.0;
         if (scale <= 0) {
             for (int i = 0; i < N_; ++i) beta[i * C_ + c] = 0;
             continue;

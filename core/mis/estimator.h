@@ -181,11 +181,11 @@ private:
     }
     void progressive_estimate(MisResult& out) const;
     // The level test's halves (level_scale in estimator.cpp), levels
-    // 1, 2, ... while 2^level ≤ rounds: per level, channel c's balance sum
-    // over its first half less its second into D[l], and the same of
-    // Σ p_k/q into c_diff[l*N + k] when given. Returns the levels.
+    // 1, 2, ... while 2^level ≤ rounds: per level, each channel's balance
+    // sum over its first half less its second into D[l*C + c], and the same
+    // of Σ p_k/q into c_diff[l*N + k]. Returns the levels.
     static constexpr int kMaxLevels = 32;
-    int level_differences(int c, double* D, double* c_diff) const;
+    int level_differences(double* D, double* c_diff) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};
 };

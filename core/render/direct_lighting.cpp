@@ -621,8 +621,10 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     if (it == cache.end()) {
         std::vector<int> n;
         for (int k : active) n.push_back(counts[k]);
+        StrategyOptions options = p_.settings.options;
+        options.sequence_rounds = true;  // each technique draws one scrambled sequence
         it = cache.emplace(key, MisEstimator(p_.settings.strategy, int(active.size()), 3, n,
-                                             p_.settings.options))
+                                             options))
                  .first;
     }
     it->second.reset();
