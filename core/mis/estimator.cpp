@@ -446,30 +446,13 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
         }
         start = end;
     }
-    // The level test (sequence rounds) on the cross-fit's own corrections: the
-    // halves of level L are epochs 0..L−1 and epoch L, so G_L = epoch L's sum
-    // less theirs. Its scale depends on every epoch, the one it scales too:
-    // a bias (Cov(λ, correction)), which at few levels showed (4.7σ at 4
-    // rounds of 8 samples, test_direct_lighting); so it needs 3 levels (8
-    // rounds), and below that the estimate is balance's. Measured:
-    // bias/σ in bench/results/hard_cases_one_sequence.txt.
-    constexpr int kProgressiveLevels = 3;
-    double D_all[kMaxLevels * kMaxMisChannels], c_diff[kMaxLevels * kMaxMisTechniques];
-    const int levels = options_.sequence_rounds ? level_differences(D_all, c_diff) : 0;
+    // No level test here: scaling the cross-fit by it (from all levels) biased
+    // the estimate, and from the levels below each epoch it lost to balance
+    // (issue 10; see README). The cross-fit stays unbiased.
     for (int c = 0; c < C_; ++c) {
-        double D[kMaxLevels], G[kMaxLevels], total_correction = 0, before = 0;
-        for (int l = 0; l < levels; ++l) {
-            D[l] = D_all[l * C_ + c];
-            before += epoch_sum[l][c];
-            G[l] = epoch_sum[l + 1][c] - before;
-        }
+        double total_correction = 0;
         for (int e = 0; e <= boundaries; ++e) total_correction += epoch_sum[e][c];
-        double scale = 1;
-        if (options_.sequence_rounds)
-            scale = levels >= kProgressiveLevels && total_correction != 0
-                        ? level_scale(D, G, levels)
-                        : 0.0;
-        out.estimate[c] = balance_estimate(c) + scale * total_correction / rounds_;
+        out.estimate[c] = balance_estimate(c) + total_correction / rounds_;
     }
 }
 
