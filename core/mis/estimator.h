@@ -89,6 +89,13 @@ public:
     // checks, no allocation.
     void stream_estimates(int s, const double* beta, double* balance,
                           double* corrected = nullptr) const;
+    // optimal-direct: stream s's balance estimate into balance[C] and, into
+    // corrected[C], that plus the correction with the α solved from the
+    // OTHER streams' samples (cross-fitting by stream): each stream's
+    // estimate is then free of its own fit, so the streams' spread includes
+    // the fit's error, which a common α hides (issue 10: a noise target's
+    // error read 0.5–0.6 of the true one). One solve per stream.
+    void stream_cross_fit(int s, double* balance, double* corrected) const;
 
     // The control-variate estimate (SPEC §2) for a given α (N×C, [k*C + c]);
     // any α ∝ n reproduces the balance estimate bit for bit.
@@ -164,11 +171,21 @@ private:
     // Progressive: the running moments (a, b, m, c) after rounds 1, 2, 4,
     // 8, ..., one block each: the epoch boundaries of the cross-fit.
     std::vector<double> snapshots_;
-    // Per stream: Σ Y per channel, Σ p_k/q per technique (optimal), rounds.
+    // Per stream: Σ Y per channel, Σ p_k/q per technique (optimal), rounds;
+    // optimal-direct also the stream's a, b and m (stream_cross_fit).
     int streams_ = 0, stream_ = 0;
     std::vector<double> stream_sums_;
-    int stream_stride() const { return C_ + N_ + 1; }
+    bool stream_moments() const { return strategy_ == Strategy::OptimalDirect; }
+    int stream_stride() const {
+        return C_ + N_ + 1 + (stream_moments() ? N_ * N_ + N_ * C_ + C_ : 0);
+    }
     void progressive_estimate(MisResult& out) const;
+    // The level test's halves (level_scale in estimator.cpp), levels
+    // 1, 2, ... while 2^level ≤ rounds: per level, each channel's balance
+    // sum over its first half less its second into D[l*C + c], and the same
+    // of Σ p_k/q into c_diff[l*N + k]. Returns the levels.
+    static constexpr int kMaxLevels = 32;
+    int level_differences(double* D, double* c_diff) const;
     // Optimal strategies, per channel: whether any sample had f < 0.
     std::array<bool, kMaxMisChannels> negative_f_{};
 };

@@ -19,6 +19,12 @@ enum class Strategy {
 struct StrategyOptions {
     double beta = 2.0;    // exponent of the power heuristic
     double cutoff = 0.1;  // relative threshold a of the cutoff heuristic
+    // Optimal strategies: round r holds point r of one scrambled Sobol'
+    // sequence per technique (omis's own draws), not independent samples.
+    // Then optimal-direct's α is also judged by the sequence's own halves
+    // (the level test, mis/estimator.cpp), since such draws err far less
+    // than the independent-draw variances rule 3 compares.
+    bool sequence_rounds = false;
 };
 
 // Names are part of the interface (SPEC §6): "balance", "optimal-direct", ...

@@ -151,12 +151,10 @@ struct PointLighting::Impl {
     // The estimators' results stay in results_ (main, hidden) until the next call.
     Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
     // Stream s's estimate from the whole's per-stream sums (streams_in_whole):
-    // its balance (heuristics: own) estimate, or with the α of the last
-    // estimate_of (optimal-direct: the whole's); and that α's rule-3
-    // inflation of the variance.
-    void stream_of(const Estimators& whole, int s, bool with_alpha, Vec3& balance,
+    // its balance (heuristics: own) estimate, and (cross_fit, optimal-direct)
+    // that corrected with the α of the other streams (MisEstimator::stream_cross_fit).
+    void stream_of(const Estimators& whole, int s, bool cross_fit, Vec3& balance,
                    Vec3& corrected) const;
-    double whole_alpha_inflation() const;
     // The balance heuristic's estimate from the same samples (optimal
     // strategies accumulate it alongside their moments).
     static Vec3 balance_of(const Estimators& e);
@@ -172,7 +170,7 @@ struct PointLighting::Impl {
     // Optimal strategies: whether the independent streams say the optimal
     // estimate is noisier here than the balance heuristic's.
     static bool balance_is_better(const Vec3* optimal, const Vec3* balance,
-                                  const int* stream_rounds, double optimal_inflation);
+                                  const int* stream_rounds);
 
     struct Integrand {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
@@ -732,8 +730,10 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     if (it == cache.end()) {
         std::vector<int> n;
         for (int k : active) n.push_back(counts[k]);
+        StrategyOptions options = p_.settings.options;
+        options.sequence_rounds = true;  // each technique draws one scrambled sequence
         it = cache.emplace(key, MisEstimator(p_.settings.strategy, int(active.size()), 3, n,
-                                             p_.settings.options))
+                                             options))
                  .first;
     }
     it->second.reset();
@@ -1039,7 +1039,7 @@ void PointLighting::Impl::set_stream(const Estimators& all, int s) {
 // weighted by the streams' rounds). A selection from 4 streams is noisy, but
 // it picks between two unbiased-or-consistent estimates of the same value.
 bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* balance,
-                                            const int* stream_rounds, double optimal_inflation) {
+                                            const int* stream_rounds) {
     double rounds = 0, mean_o = 0, mean_b = 0;
     double opt[kMaxSampleStreams], bal[kMaxSampleStreams];
     for (int s = 0; s < kMaxSampleStreams; ++s) {
@@ -1058,7 +1058,7 @@ bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* bal
         spread_o += stream_rounds[s] * (opt[s] - mean_o) * (opt[s] - mean_o);
         spread_b += stream_rounds[s] * (bal[s] - mean_b) * (bal[s] - mean_b);
     }
-    return spread_b < spread_o * optimal_inflation;
+    return spread_b < spread_o;
 }
 
 Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
@@ -1074,27 +1074,23 @@ Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
     return total;
 }
 
-// With the whole's α fixed, a stream's estimate is its balance estimate plus
-// its own control-variate correction: no solve per stream. The spread of
-// these over the streams is that of the optimal estimate without α's
-// estimation noise, and in-sample slightly optimistic; rule 3's inflation
-// (whole_alpha_inflation) restores both, as for the estimate's own variance.
-void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool with_alpha,
+// optimal-direct's stream s is corrected with the α solved from the other
+// streams (cross-fitting by stream): the streams' spread then holds the
+// fit's error too, which one α common to all of them hides (issue 10).
+void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_fit,
                                     Vec3& balance, Vec3& corrected) const {
     balance = corrected = Vec3();
     const MisEstimator* estimators[2] = {whole.main, whole.hidden};
     for (int i = 0; i < 2; ++i) {
         if (!estimators[i]) continue;
         double b[3], e[3];
-        estimators[i]->stream_estimates(s, results_[i].alpha.data(), b,
-                                        with_alpha ? e : nullptr);
+        if (cross_fit)
+            estimators[i]->stream_cross_fit(s, b, e);
+        else
+            estimators[i]->stream_estimates(s, nullptr, b);
         balance += Vec3(b[0], b[1], b[2]);
-        corrected += with_alpha ? Vec3(e[0], e[1], e[2]) : Vec3(b[0], b[1], b[2]);
+        corrected += cross_fit ? Vec3(e[0], e[1], e[2]) : Vec3(b[0], b[1], b[2]);
     }
-}
-
-double PointLighting::Impl::whole_alpha_inflation() const {
-    return std::max(results_[0].fit_inflation, results_[1].fit_inflation);
 }
 
 // Per-light sample streams for the light techniques that draw from a
@@ -1221,7 +1217,8 @@ void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPla
 // The point's estimate once its rounds are in: the whole's estimate, then
 // each stream's — the optimal strategies compare it with balance's
 // (balance_is_better), and the chosen one's spread is the error;
-// optimal-direct applies the whole's α to every stream. own_variance: as for
+// optimal-direct's streams are cross-fitted (stream_of) and their mean is its
+// estimate, so that spread is its error. own_variance: as for
 // independent draws; error_variance: from the streams' spread when kept.
 Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& plan,
                                          const Estimators& all, const Estimators* per,
@@ -1234,12 +1231,7 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
     const bool direct = p_.settings.strategy == Strategy::OptimalDirect;
     own_variance = Vec3();
     Vec3 whole, total = delta.at_centre;
-    double inflation = 1;
-    if (sampled) {
-        for (MisResult& r : results_) r.fit_inflation = 1;  // no hidden estimator: none
-        whole = estimate_of(all, &own_variance);
-        if (direct) inflation = whole_alpha_inflation();
-    }
+    if (sampled) whole = estimate_of(all, &own_variance);
     Vec3 stream_estimate[K], stream_balance[K];
     if (plan.by_stream && sampled)
         for (int s = 0; s < K; ++s) {
@@ -1249,12 +1241,24 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
                 stream_estimate[s] = estimate_of(per[s]);
                 continue;
             }
-            // The heuristics' own estimate; optimal-direct's with the whole's α.
+            // The heuristics' own estimate; optimal-direct's cross-fitted.
             stream_of(all, s, direct, stream_balance[s], stream_estimate[s]);
         }
+    const bool cross_fitted = sampled && direct && plan.in_whole;
+    if (cross_fitted) {  // the streams' mean, unless negative where balance is not
+        Vec3 mean;
+        for (int s = 0; s < K; ++s)
+            mean += stream_estimate[s] * (double(plan.stream_rounds[s]) / rounds);
+        const Vec3 balance = balance_of(all);
+        const bool negative = (mean.x < 0 && balance.x >= 0) || (mean.y < 0 && balance.y >= 0) ||
+                              (mean.z < 0 && balance.z >= 0);
+        whole = negative ? balance : mean;
+        if (negative)
+            for (int s = 0; s < K; ++s) stream_estimate[s] = stream_balance[s];
+    }
     const bool use_balance =
         sampled && plan.by_stream && optimal &&
-        balance_is_better(stream_estimate, stream_balance, plan.stream_rounds, inflation);
+        balance_is_better(stream_estimate, stream_balance, plan.stream_rounds);
     if (sampled) total += use_balance ? balance_of(all) : whole;
     Vec3 delta_total;
     for (const Vec3& d : delta.sum) delta_total += d;
@@ -1284,18 +1288,12 @@ Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& 
         if (sampled) e[s] += use_balance ? stream_balance[s] : stream_estimate[s];
         mean += e[s] * (double(plan.stream_rounds[s]) / rounds);
     }
-    if (streams) {
-        // optimal-direct's streams share the α fitted to them all, so their
-        // spread is in-sample optimistic; rule 3's inflation widens it (as in
-        // balance_is_better) before callers combine passes from it.
-        const double widen = sampled && direct && !use_balance ? std::sqrt(inflation) : 1.0;
-        const double centre = luminance(mean);
+    if (streams)
         for (int s = 0; s < K; ++s) {
             if (!plan.stream_rounds[s]) continue;
             streams->rounds[s] = plan.stream_rounds[s];
-            streams->luminance[s] = centre + widen * (luminance(e[s]) - centre);
+            streams->luminance[s] = luminance(e[s]);
         }
-    }
     error_variance = Vec3();
     for (int s = 0; s < K; ++s) {
         if (!plan.stream_rounds[s]) continue;

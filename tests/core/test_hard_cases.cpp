@@ -1,6 +1,6 @@
-// Issue 10's guarantee on the hard-case suite (tests/hard_cases): at 1, 4, 16,
-// 64 and 256 samples per technique, optimal-direct's and optimal-progressive's
-// MSE are at most 1.05 × the balance heuristic's, and no estimate is negative
+// Issue 10's guarantee on the hard-case suite (tests/hard_cases): at 1, 2, 4,
+// 8, 16, 64 and 256 samples per technique (one scrambled sequence a point),
+// optimal-direct's and optimal-progressive's MSE are at most 1.05 × the balance heuristic's, and no estimate is negative
 // (every emitter of the suite emits non-negative radiance).
 //
 // The MSEs come from kCopies independent estimates of each of 8 points per
@@ -57,7 +57,9 @@ TEST_CASE("hard cases: optimal MIS never loses to balance and is never negative"
         // Reference: 8 copies × 2048 rounds of balance, 64× the largest run
         // below, so its error adds ≤ 1/64 of balance's variance to both MSEs.
         const auto ref = reference(scene, hc, 2048, 8, 777);
-        for (int spp : {1, 4, 16, 64, 256}) {
+        // The suite's counts and 2 and 8 between them (2 spp: the fewest
+        // rounds with a level to judge α by; issue 10 measured a 1.23× loss there).
+        for (int spp : {1, 2, 4, 8, 16, 64, 256}) {
             const Errors balance =
                 errors(run(scene, hc, Strategy::Balance, spp, kCopies, 5), ref, points, kCopies);
             for (Strategy s : {Strategy::OptimalDirect, Strategy::OptimalProgressive}) {
