@@ -8,36 +8,17 @@
 #include "bake/bake.h"
 #include "render/scene.h"
 #include "render/techniques.h"
+#include "support/floor_lambert.h"
 
 using namespace omis;
 
-namespace {
-
-// A 2 m floor (two triangles, UVs over [0,1]²) under a 1 m rect light at 1 m.
-void floor_scene(Scene& scene, std::vector<float>& positions,
-                 std::vector<std::uint32_t>& triangles, std::vector<float>& uvs) {
-    positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
-    triangles = {0, 1, 2, 0, 2, 3};
-    for (std::uint32_t i : triangles)
-        uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
-    MeshInput m;
-    m.name = "floor";
-    m.positions = ScalarArray::of(positions.data(), 4, 3);
-    m.triangles = IndexArray{triangles.data(), 2, 3};
-    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
-    scene.add_mesh(m);
-    scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
-                                    Vec3(2, 2, 2), false, kPi));
-    scene.commit();
-}
-
-}  // namespace
+using testing::two_triangle_floor;
 
 TEST_CASE("a time budget's first pass is one round, whatever the strategy", "[bake]") {
     Scene scene;
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;
-    floor_scene(scene, positions, triangles, uvs);
+    two_triangle_floor(scene, positions, triangles, uvs);
     for (Strategy strategy :
          {Strategy::Balance, Strategy::OptimalDirect, Strategy::OptimalProgressive}) {
         BakeSettings s;
@@ -63,7 +44,7 @@ TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes
     Scene scene;
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;
-    floor_scene(scene, positions, triangles, uvs);
+    two_triangle_floor(scene, positions, triangles, uvs);
     // One round; two and a final 2; four rounds; eight.
     for (long long n : {5LL, 12LL, 20LL, 40LL}) {
         BakeSettings s;

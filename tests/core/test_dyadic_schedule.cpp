@@ -79,20 +79,10 @@ TEST_CASE("NetRate recovers α from the changes of nested means", "[bake][schedu
 
 TEST_CASE("a time-budget bake ends on a power of two of rounds (plus tails) and stays "
           "unbiased", "[bake][schedule]") {
-    std::vector<float> positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0}, uvs;
-    std::vector<std::uint32_t> triangles = {0, 1, 2, 0, 2, 3};
-    for (std::uint32_t i : triangles)
-        uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
     Scene scene;
-    MeshInput m;
-    m.name = "floor";
-    m.positions = ScalarArray::of(positions.data(), 4, 3);
-    m.triangles = IndexArray{triangles.data(), 2, 3};
-    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
-    scene.add_mesh(m);
-    scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
-                                    Vec3(2, 2, 2), false, kPi));
-    scene.commit();
+    testing::two_triangle_floor(scene, positions, triangles, uvs);
 
     BakeSettings s;
     s.lighting.techniques = {*parse_technique("uniform/area")};

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "bake/uv_raster.h"
 #include "render/scene.h"
@@ -31,6 +33,26 @@ inline double floor_lambert_footprint(const Scene& scene, const UvCoverage& cov,
             sum += floor_lambert(mesh.position(map.triangle(), bc[0], bc[1]));
         }
     return sum / (n * n);
+}
+
+// The floor alone: a 2 m square of two triangles (UVs over [0,1]²) under that
+// light, committed. The arrays must outlive the scene (it reads them in place).
+inline void two_triangle_floor(Scene& scene, std::vector<float>& positions,
+                               std::vector<std::uint32_t>& triangles, std::vector<float>& uvs) {
+    positions = {-1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0};
+    triangles = {0, 1, 2, 0, 2, 3};
+    uvs.clear();
+    for (std::uint32_t i : triangles)
+        uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
+    MeshInput m;
+    m.name = "floor";
+    m.positions = ScalarArray::of(positions.data(), 4, 3);
+    m.triangles = IndexArray{triangles.data(), 2, 3};
+    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
+    scene.add_mesh(m);
+    scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
+                                    Vec3(2, 2, 2), false, kPi));
+    scene.commit();
 }
 
 }  // namespace omis::testing
