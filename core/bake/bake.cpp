@@ -267,6 +267,7 @@ struct Pass {
     const int* counts = nullptr;  // null: the settings' counts
     std::uint32_t samples = 0;    // per point
     double weight = 0;            // in the running means; 0: samples (a tail block's is less)
+    bool tail = false;            // a tail block after a time budget's last net
     const std::vector<DrawnRounds>* earlier = nullptr;  // allocated tiles: their calls so far
 };
 
@@ -374,7 +375,7 @@ private:
     }
     void run_passes();
     bool noise_target_met() const;
-    void record_pass(double sampling_start);
+    void record_pass(double sampling_start, bool tail);
     void forget_probe();
     void write_outputs();
     void fill_margin();
@@ -780,6 +781,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
     pass.first_round = done_rounds_;
     pass.rounds = next.rounds;
     pass.samples = std::uint32_t(pass.rounds * budget_.per_round);
+    pass.tail = next.tail;
     if (next.tail && 2 * next.rounds != done_rounds_)
         pass.weight = budget_.per_round * tail_weight(power_of_two_floor(done_rounds_),
                                                       next.rounds, rate_.alpha());
@@ -833,7 +835,7 @@ void Baker::run_passes() {
             status_ = BakeStatus::Cancelled;
             return;
         }
-        record_pass(sampling_start);
+        record_pass(sampling_start, pass.tail);
         if (pass.counts) last_done_ = true;
         if (!pass.counts) last_pass_rounds_ = pass.rounds;
         if (probe_ && pass_count_ == 1) {
@@ -873,7 +875,7 @@ void Baker::forget_probe() {
 
 // The bake's convergence after a pass (convergence.h): what the running means
 // have reached, and when.
-void Baker::record_pass(double sampling_start) {
+void Baker::record_pass(double sampling_start, bool tail) {
     const double seconds = elapsed() - sampling_start;
     double sum_error = 0, sum_samples = 0;
     std::size_t covered = 0;
@@ -887,6 +889,7 @@ void Baker::record_pass(double sampling_start) {
     r.seconds = seconds;
     r.samples_per_texel = covered ? sum_samples / double(covered) : 0;
     r.mean_relative_error = covered ? sum_error / double(covered) : 0;
+    r.tail = tail;
     result_.stats.convergence.push_back(r);
 }
 

@@ -19,12 +19,14 @@ constexpr double kMinTimeSpan = 1.25, kMinSamplesSpan = 1.5;
 HalvingPrediction predict_halving(const std::vector<BakePassRecord>& history) {
     HalvingPrediction p;
     const double t = history.empty() ? 0.0 : std::max(0.0, history.back().seconds);
-    std::vector<BakePassRecord> used;
+    std::vector<BakePassRecord> used, passes;
+    for (const BakePassRecord& r : history)
+        if (!r.tail) passes.push_back(r);
     // The first pass only when there are just two.
-    const std::size_t n = history.size();
+    const std::size_t n = passes.size();
     const std::size_t first = n <= 2 ? 0 : std::max<std::size_t>(1, n > kMaxFitted ? n - kMaxFitted : 1);
     for (std::size_t i = first; i < n; ++i) {
-        const BakePassRecord& r = history[i];
+        const BakePassRecord& r = passes[i];
         const bool usable = r.seconds > 0 && std::isfinite(r.seconds) &&
                             r.mean_relative_error > 0 && std::isfinite(r.mean_relative_error) &&
                             (used.empty() || r.seconds > used.back().seconds);

@@ -12,6 +12,10 @@ struct BakePassRecord {
     double samples_per_texel = 0;    // mean over the baked texels (or corners)
     double seconds = 0;              // sampling time from the first pass's start
     double mean_relative_error = 0;  // the running estimate's, mean over baked texels
+    // A time budget's tail block (bake/dyadic_schedule.h): it joins the net's
+    // mean at a reduced weight, so its error does not follow the rate of the
+    // passes before it; the fit leaves it out.
+    bool tail = false;
 };
 
 struct HalvingPrediction {
@@ -24,8 +28,9 @@ struct HalvingPrediction {
 // β from a least-squares line through (ln t, ln error) of the last passes (at
 // most four; the first pass only when there are just two: its time holds the
 // warm-up, and a one-round first pass's error comes from the independent-draw
-// formula). Fewer than two usable passes, passes too close in time or samples
-// (< 1.25× apart, < 1.5×), or an error that does not fall give β = 0.5 with
+// formula; tail blocks never). Fewer than two usable passes, passes too close
+// in time or samples (< 1.25× apart, < 1.5×), or an error that does not fall
+// give β = 0.5 with
 // passes_fitted = 0; a fitted β is kept within [kMinBeta, kMaxBeta]. t is the
 // last pass's sampling time.
 constexpr double kMinBeta = 0.25, kMaxBeta = 1.5;

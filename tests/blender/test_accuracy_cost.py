@@ -92,10 +92,10 @@ def test_halving_prediction():
       relative spread of ~1/√(2·streams·rounds), small), stable to ~2 %;
     - the fitted β (least squares over ≤ 4 passes spanning ~8× in time, each point
       stable to ~2 %): ±0.03, i.e. ±(t2/t1)^0.03 ≈ ±3 % in the ratio;
-    - where a budget ends in the pass schedule: one round, half the time left, and the
-      last takes the rest (about the samples before it); as each pass's estimate joins the
-      others' as an independent one, the error reached at a given time moves by up
-      to ~10 % with the size of that last pass;
+    - where a budget ends in the pass schedule: passes end on powers of two of rounds
+      and the time left takes tail blocks (core/bake/dyadic_schedule.h), so the error
+      reached at a given time moves by up to ~10 % with the size of the last tail (the
+      fit leaves tails out);
     - time itself: the two bakes run at different moments on a shared 2-core
       machine; a 25 % change in throughput moves the error by 1.25^β ≈ 1.17
       (β ≈ 0.7 measured here).

@@ -116,3 +116,27 @@ TEST_CASE("a time-budget bake ends on a power of two of rounds (plus tails) and 
         CHECK(std::abs(sum_z / double(count)) < 0.5);
     }
 }
+
+TEST_CASE("the halving fit leaves tail blocks out", "[bake][schedule]") {
+    // Passes at error ∝ t^-0.75, then two tails whose error hardly moves: with
+    // them the slope would flatten; without, β is the passes' own.
+    std::vector<BakePassRecord> history;
+    for (double t : {0.01, 0.04, 0.16, 0.64}) {
+        BakePassRecord r;
+        r.seconds = t;
+        r.samples_per_texel = 100 * t;
+        r.mean_relative_error = 0.1 * std::pow(t, -0.75);
+        history.push_back(r);
+    }
+    for (double t : {0.8, 0.9}) {
+        BakePassRecord r = history.back();
+        r.seconds = t;
+        r.samples_per_texel = 100 * t;
+        r.tail = true;
+        history.push_back(r);
+    }
+    const HalvingPrediction p = predict_halving(history);
+    CHECK(p.measured());
+    CHECK(p.beta == Approx(0.75).epsilon(1e-9));
+    CHECK(p.seconds == Approx(0.9 * (std::pow(2.0, 1 / 0.75) - 1)).epsilon(1e-9));
+}
