@@ -50,42 +50,26 @@ std::vector<Vec3> rect(const Vec3& corner, const Vec3& u, const Vec3& v) {
 
 TEST_CASE("the effect plan draws comparable local lights uniformly, others defensively",
           "[plan]") {
-    SECTION("two rects, powers 2:1 -> uniform") {
+    // The selection the plan gives a scene of these lights alone.
+    auto selection_for = [](const std::vector<Light>& lights) {
         Scene scene;
-        scene.add_light(ceiling_rect(-0.5, -0.5, 1, 2));
-        scene.add_light(ceiling_rect(1.0, -0.5, 1.5, 1));
+        for (const Light& light : lights) scene.add_light(light);
         scene.commit();
-        CHECK(plan_names(scene).front() == "uniform/solid-angle");
-    }
-    SECTION("two rects, powers 9:1 -> defensive") {
-        Scene scene;
-        scene.add_light(ceiling_rect(-0.5, -0.5, 1, 9));
-        scene.add_light(ceiling_rect(1.0, -0.5, 1.5, 1));
-        scene.commit();
-        CHECK(plan_names(scene).front() == "defensive/solid-angle");
-    }
-    SECTION("a world among the lights -> defensive") {
-        Scene scene;
-        scene.add_light(ceiling_rect(-0.5, -0.5, 1, 1));
-        scene.add_light(make_world_light(Vec3(0.001, 0.001, 0.001)));
-        scene.commit();
-        CHECK(plan_names(scene).front() == "defensive/solid-angle");
-    }
-    SECTION("a sun among the lights -> defensive") {
-        Scene scene;
-        scene.add_light(ceiling_rect(-0.5, -0.5, 1, 1));
-        scene.add_light(make_sun_light(Vec3(0, 0, -1), Vec3(1, 1, 1), 0.1));
-        scene.commit();
-        CHECK(plan_names(scene).front() == "defensive/solid-angle");
-    }
-    SECTION("delta lights do not count") {
-        Scene scene;
-        scene.add_light(ceiling_rect(-0.5, -0.5, 1, 1));
-        scene.add_light(ceiling_rect(1.0, -0.5, 1.5, 1));
-        scene.add_light(make_point_light(Vec3(0, 0, 2), Vec3(100, 100, 100), 0));
-        scene.commit();
-        CHECK(plan_names(scene).front() == "uniform/solid-angle");
-    }
+        return plan_names(scene).front();
+    };
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 2), ceiling_rect(1.0, -0.5, 1.5, 1)}) ==
+          "uniform/solid-angle");  // powers 2:1
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 9), ceiling_rect(1.0, -0.5, 1.5, 1)}) ==
+          "defensive/solid-angle");  // powers 9:1
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 1),
+                         make_world_light(Vec3(0.001, 0.001, 0.001))}) ==
+          "defensive/solid-angle");  // a world among the lights
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 1),
+                         make_sun_light(Vec3(0, 0, -1), Vec3(1, 1, 1), 0.1)}) ==
+          "defensive/solid-angle");  // a sun among the lights
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 1), ceiling_rect(1.0, -0.5, 1.5, 1),
+                         make_point_light(Vec3(0, 0, 2), Vec3(100, 100, 100), 0)}) ==
+          "uniform/solid-angle");  // delta lights do not count
 }
 
 TEST_CASE("the uniform plan matches the exact answer under a half-hidden light", "[plan]") {
