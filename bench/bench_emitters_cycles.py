@@ -43,22 +43,11 @@ def floor_scene(size):
     return [ob]
 
 
-def emission_material():
-    mat = bpy.data.materials.new("Glow")
-    mat.use_nodes = True
-    nodes = mat.node_tree.nodes
-    nodes.remove(nodes["Principled BSDF"])
-    em = nodes.new("ShaderNodeEmission")
-    em.inputs["Strength"].default_value = 1.0
-    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
-    return mat
-
-
 def sphere(stacks, slices):
     def build():
         bpy.ops.mesh.primitive_uv_sphere_add(segments=slices, ring_count=stacks, radius=0.5,
                                              location=(0, 0, 1.5))
-        bpy.context.active_object.data.materials.append(emission_material())
+        bpy.context.active_object.data.materials.append(U.emission_material("Glow"))
     return build
 
 

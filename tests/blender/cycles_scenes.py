@@ -100,15 +100,7 @@ def scene_emission_world(size=SIZE):
                                      rotation=(U.deg(180), 0, 0))
     emitter = bpy.context.active_object
     emitter.name = "emitter"
-    mat = bpy.data.materials.new("Glow")
-    mat.use_nodes = True
-    nodes = mat.node_tree.nodes
-    nodes.remove(nodes["Principled BSDF"])
-    em = nodes.new("ShaderNodeEmission")
-    em.inputs["Color"].default_value = (1.0, 0.8, 0.6, 1.0)
-    em.inputs["Strength"].default_value = 6.0
-    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
-    emitter.data.materials.append(mat)
+    emitter.data.materials.append(U.emission_material("Glow", (1.0, 0.8, 0.6), 6.0))
     U.add_box("occluder", (0.4, 0.4, 0.05), (-0.4, 0.0, 0.35))
     world = bpy.data.worlds.new("World")
     world.use_nodes = True
@@ -212,18 +204,6 @@ def scene_suzanne_vertices():
     return [monkey]
 
 
-def _emission_material(name, color, strength):
-    mat = bpy.data.materials.new(name)
-    mat.use_nodes = True
-    nodes = mat.node_tree.nodes
-    nodes.remove(nodes["Principled BSDF"])
-    em = nodes.new("ShaderNodeEmission")
-    em.inputs["Color"].default_value = (*color, 1.0)
-    em.inputs["Strength"].default_value = strength
-    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
-    return mat
-
-
 def scene_many_lights(size=SIZE):
     # Issue 8: 64 lights of mixed types (squares, disks, points with and without
     # radius, spots) in an 8 × 8 grid over the receiver, and a box shadowing it:
@@ -262,7 +242,7 @@ def scene_emissive_mesh(size=SIZE):
                                          location=(0.2, 0.1, 0.6))
     sphere = bpy.context.active_object
     sphere.name = "glow_sphere"
-    sphere.data.materials.append(_emission_material("Glow", (1.0, 0.85, 0.7), 3.0))
+    sphere.data.materials.append(U.emission_material("Glow", (1.0, 0.85, 0.7), 3.0))
     U.add_light('AREA', "square", energy=40.0, location=(0.35, 0.2, 1.4), shape='SQUARE',
                 size=0.3)
     return objs

@@ -62,6 +62,20 @@ def make_image(name, size=64, float_buffer=True, color=(0.0, 0.0, 0.0, 1.0)):
     return img
 
 
+def emission_material(name, color=(1.0, 1.0, 1.0), strength=1.0):
+    """A material whose surface is one Emission node (no BSDF): an emitter as an
+    artist makes one, for Cycles' emission sampling and omis' mesh lights."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    nodes.remove(nodes["Principled BSDF"])
+    em = nodes.new("ShaderNodeEmission")
+    em.inputs["Color"].default_value = (*color, 1.0)
+    em.inputs["Strength"].default_value = strength
+    mat.node_tree.links.new(em.outputs[0], nodes["Material Output"].inputs["Surface"])
+    return mat
+
+
 def image_material(name, image):
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True

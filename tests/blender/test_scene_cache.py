@@ -32,14 +32,7 @@ def build():
     bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1, radius=0.1, location=(-0.5, 0.4, 0.4))
     glow = bpy.context.active_object
     glow.name = "glow"
-    mat = bpy.data.materials.new("Glow")
-    mat.use_nodes = True
-    nodes = mat.node_tree.nodes
-    nodes.remove(nodes["Principled BSDF"])
-    emission = nodes.new("ShaderNodeEmission")
-    emission.inputs["Strength"].default_value = 4.0
-    mat.node_tree.links.new(emission.outputs[0], nodes["Material Output"].inputs["Surface"])
-    glow.data.materials.append(mat)
+    glow.data.materials.append(U.emission_material("Glow", strength=4.0))
     world = bpy.data.worlds.new("World")
     world.use_nodes = True
     world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.2
