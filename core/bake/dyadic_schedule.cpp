@@ -58,6 +58,16 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
     return pass;
 }
 
+PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds,
+                                int rounds_total) {
+    PassAfterProbe next;
+    next.pass = next_dyadic_pass(0, fit, min_rounds, rounds_total);
+    if (next.pass.rounds >= 1) return next;
+    next.keep_probe = true;
+    next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds);
+    return next;
+}
+
 double tail_weight(int net_rounds, int tail_rounds, double alpha) {
     return double(net_rounds) * std::pow(double(tail_rounds) / net_rounds, alpha);
 }

@@ -43,6 +43,16 @@ struct DyadicPass {
 constexpr int kSmallestTail = 16;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
+// After an optimal strategy's probe of `probe_rounds` (done = 0): the first
+// net of at least min_rounds from round 0, replacing the probe; where that no
+// longer fits, the probe is kept as the first rounds (`keep_probe`) and the
+// pass after it follows as for done = probe_rounds.
+struct PassAfterProbe {
+    DyadicPass pass;
+    bool keep_probe = false;
+};
+PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds, int rounds_total);
+
 // The largest power of two ≤ n (n ≥ 1).
 int power_of_two_floor(int n);
 

@@ -41,6 +41,28 @@ TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]
     CHECK_FALSE(next_dyadic_pass(64, 1000, 1, 40).tail);
 }
 
+TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the probe stays",
+          "[bake][schedule]") {
+    const int lots = 1 << 20;
+    // The first net of min_rounds fits: it replaces the probe.
+    PassAfterProbe after = pass_after_probe(1, 10, 4, lots);
+    CHECK_FALSE(after.keep_probe);
+    CHECK(after.pass.rounds == 4);
+    // It does not: the probe is the first round, the next pass takes it to 2.
+    after = pass_after_probe(1, 2.5, 4, lots);
+    CHECK(after.keep_probe);
+    CHECK(after.pass.rounds == 1);
+    CHECK_FALSE(after.pass.tail);
+    // ... or to 4 where three rounds fit in half the time left.
+    after = pass_after_probe(1, 7.9, 8, lots);
+    CHECK(after.keep_probe);
+    CHECK(after.pass.rounds == 3);
+    // Not even a round fits: the bake ends on the probe.
+    after = pass_after_probe(1, 0.9, 4, lots);
+    CHECK(after.keep_probe);
+    CHECK(after.pass.rounds == 0);
+}
+
 TEST_CASE("a tail's weight: its rounds at α = 1, less where the error falls faster",
           "[bake][schedule]") {
     CHECK(tail_weight(32, 8, 1.0) == Approx(8));
