@@ -122,6 +122,7 @@ struct PointLighting::Impl {
                        std::uint64_t rays_before);
     std::vector<std::uint32_t> draw_start_;
     AllocationPilot* pilot_ = nullptr;
+    PointLighting::SetupTiming* setup_timing_ = nullptr;  // the owner's
     class LightStreams;
     // LightStreams' storage, kept from point to point (no allocation per
     // point and pass): per technique, stream and table slot, the draws taken
@@ -816,6 +817,9 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
             restore(*entry, active);
             return;
         }
+    const bool timed = keep && setup_timing_ && setup_timing_->on;
+    const auto start =
+        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
     choose_active(probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
@@ -829,6 +833,9 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     // budget on them.
     if (entry.tables.empty()) return;
     kept.keep(stream, std::move(entry));
+    if (timed)
+        setup_timing_->kept_setup +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // choose_active's result from a kept entry: the same techniques in the same
@@ -1457,11 +1464,14 @@ const LightSelector* LightingContext::selector(LightSelection selection) const {
 }
 
 PointLighting::PointLighting(const LightingContext& context)
-    : impl_(std::make_unique<Impl>(context, counters)) {}
+    : impl_(std::make_unique<Impl>(context, counters)) {
+    impl_->setup_timing_ = &setup_timing;
+}
 PointLighting::~PointLighting() = default;
 PointLighting::PointLighting(PointLighting&& other) noexcept
-    : counters(other.counters), impl_(std::move(other.impl_)) {
+    : counters(other.counters), setup_timing(other.setup_timing), impl_(std::move(other.impl_)) {
     if (impl_) impl_ = std::make_unique<Impl>(impl_->p_, counters);
+    if (impl_) impl_->setup_timing_ = &setup_timing;
 }
 
 void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
@@ -1469,8 +1479,13 @@ void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
                           double value[3], double variance[3], const int* counts,
                           double own_variance[3], StreamEstimates* streams,
                           const std::vector<DrawnRounds>* earlier) {
+    const auto start = setup_timing.on ? std::chrono::steady_clock::now()
+                                       : std::chrono::steady_clock::time_point();
     impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
                  own_variance, streams, earlier);
+    if (setup_timing.on)
+        setup_timing.shading +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void PointLighting::record_into(AllocationPilot* pilot) {

@@ -214,6 +214,16 @@ public:
 
     LightingCounters counters;
 
+    // What a bake's first pass spends that its later passes do not: the
+    // set-up of the tables kept for a point's later passes, beside all of the
+    // shading, in seconds, timed while `on`. The bake predicts a later pass's
+    // duration from the first one without that set-up.
+    struct SetupTiming {
+        bool on = false;
+        double kept_setup = 0, shading = 0;
+    };
+    SetupTiming setup_timing;
+
 private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
