@@ -84,6 +84,27 @@ TEST_CASE("texel tables: a later pass from kept tables equals one that works the
     }
 }
 
+TEST_CASE("texel tables: set-up timing counts the kept tables' set-up, only while on",
+          "[texel_tables]") {
+    Scene scene;
+    add_spread_scene(scene);
+    const LightingContext context(scene, settings_with(Strategy::Balance));
+    PointLighting shader(context);
+    const SquareFootprint f(Vec3(0, -0.4, 0), 0.02);
+    double v[3];
+    shader.shade(0, 0, 1, f.centre(), &f, v, nullptr);  // off: nothing timed
+    CHECK(shader.setup_timing.shading == 0);
+    CHECK(shader.setup_timing.kept_setup == 0);
+    shader.setup_timing.on = true;
+    shader.shade(1, 0, 1, f.centre(), &f, v, nullptr);  // keeps its tables: set-up timed
+    const PointLighting::SetupTiming first = shader.setup_timing;
+    CHECK(first.kept_setup > 0);
+    CHECK(first.kept_setup <= first.shading);
+    shader.shade(1, 1, 1, f.centre(), &f, v, nullptr);  // takes them back: shading only
+    CHECK(shader.setup_timing.kept_setup == first.kept_setup);
+    CHECK(shader.setup_timing.shading > first.shading);
+}
+
 TEST_CASE("texel tables: points without a footprint keep nothing at their first pass",
           "[texel_tables]") {
     Scene scene;
