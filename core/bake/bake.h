@@ -35,7 +35,8 @@ struct BakeSettings {
     // Rounds of the first pass when a noise target asks for progressive
     // passes (later passes grow); under a time budget the first pass is one
     // round (the optimal strategies, which solve per pass, go on with this
-    // many or more), and later passes end on powers of two of rounds, with a
+    // many or more from round 0 where that fits, else keep the first round),
+    // and later passes end on powers of two of rounds, with a
     // tail block weighted by its measured error (bake/dyadic_schedule.h).
     // Each pass is one estimate per texel (its own solve); passes are
     // averaged, weighted by samples (a tail block by less).
