@@ -294,6 +294,44 @@ TEST_CASE("among many emitters the plan draws from the light tree alone, with bs
     CHECK(plan_names(with_world) == std::vector<std::string>{"tree/solid-angle", "bsdf"});
 }
 
+// Two lights that give x the same irradiance, placed symmetrically about its
+// normal, must be drawn about equally often whatever their kinds: the tree
+// weighs its bounds by irradiance, not by flux (a two-sided light's flux
+// counts a side x cannot see; a point light's is 4π I against π I).
+TEST_CASE("the light tree weighs lights of different kinds by the irradiance they give",
+          "[selection]") {
+    const Vec3 x(0, 0, 0), n(0, 0, 1);
+    const double s = 0.001, r = 1 / std::sqrt(2.0);  // 1 mm lights, 1.4 m away
+    const Vec3 radiance(2, 2, 2);
+    // Facing x from (1, 0, 1): cross(edge_u, edge_v) points toward x.
+    auto right = [&](bool two_sided) {
+        const Vec3 eu(0, s, 0), ev(s * r, 0, -s * r);
+        return make_rect_light(Vec3(1, 0, 1) - (eu + ev) * 0.5, eu, ev, radiance, two_sided, kPi);
+    };
+    // The same from (−1, 0, 1).
+    auto left = [&](bool two_sided) {
+        const Vec3 eu(-s * r, 0, -s * r), ev(0, s, 0);
+        return make_rect_light(Vec3(-1, 0, 1) - (eu + ev) * 0.5, eu, ev, radiance, two_sided, kPi);
+    };
+    // A sphere light of intensity L·A: at this distance its irradiance is the rect's.
+    const Light point = make_point_light(Vec3(-1, 0, 1), radiance * (s * s), 1e-5);
+    const std::vector<std::pair<Light, Light>> pairs = {
+        {right(false), left(false)}, {right(false), left(true)}, {right(true), left(false)},
+        {right(false), point}};
+    for (const auto& [a, b] : pairs) {
+        const std::vector<Light> lights = {a, b};
+        const LightSelector tree(LightSelector::Kind::Tree, lights, all_ids(2), 10.0);
+        const double pa = tree.pmf(x, n, 0), pb = tree.pmf(x, n, 1);
+        INFO("two-sided " << a.two_sided << ", " << b.two_sided << "; point " << (b.type == LightType::Point));
+        CHECK(pa + pb == Approx(1.0));
+        // The bounds of a 1 mm light seen from 1.4 m subtend θb < 1e-3 rad:
+        // each cosine bound exceeds the exact cosine (45°) by a factor
+        // < 1 + θb·tan 45°, so the pmfs differ from 1/2 by < 1e-3 relative.
+        // (Weighed by flux, the two-sided pair gave 1/3 and 2/3, the point 1/5.)
+        CHECK(pa == Approx(0.5).epsilon(1e-3));
+    }
+}
+
 TEST_CASE("the emitter shapes find every area light a direction crosses", "[selection]") {
     // Rects, ellipses (both facing ways) and an emissive mesh around x: every
     // light whose exact shape a random direction crosses must be among the
