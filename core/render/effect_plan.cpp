@@ -185,11 +185,12 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // Many emitters: the exact unoccluded weights would cost O(L) per
         // point; the light tree picks by bounds in O(log L). One technique,
         // as with one light: one sequence of N samples converges faster than
-        // three of N/3. Measured per sample on 48² texel bakes (relative
-        // variance over seeds, issue 8): the emissive_mesh race scene 3.3×
-        // lower than tree + power + bsdf (and 2.9× lower than tree + bsdf),
-        // a many_lights-like grid of 38 area and sphere lights 2.1× lower
-        // than tree + power. Cosine sampling joins for a world and for huge
+        // three of N/3. Measured per sample (bench/bench_emitters_quality.py:
+        // relative variance over seeds of 48² texel bakes at 32 samples):
+        // the emissive_mesh race scene 1.6× lower than tree + power + bsdf
+        // (tree + bsdf: 1.3× higher than that), the many_lights grid 2.1×
+        // lower than tree + power, an emissive sphere 5 cm above the
+        // receiver 2.7× lower. Cosine sampling joins for a world and for huge
         // lights (below): under a 1.6 m emissive panel 25 cm above the
         // receiver, tree + bsdf had half the variance of the tree alone.
         add("tree/solid-angle", 1);
