@@ -165,6 +165,30 @@ double LightSelector::PackedBounds::importance(const Vec3& x, const Vec3& n,
                          cos_theta_e, two_sided, x, n, !(grow > 0));
 }
 
+namespace {
+
+// What a light's bounds weigh in importance(): π times the irradiance it
+// gives at unit distance, facing it — so that the estimate compares lights of
+// different kinds as their contributions compare. Light::power (the flux)
+// does not: a point light's is 4π I against π I of irradiance, and a
+// two-sided area light's counts both sides although a point sees only one
+// (importance() already takes the side facing it). With the flux, the tree
+// drew a two-sided emissive mesh twice as often, against a one-sided lamp, as
+// its light deserves (issue 8's emissive_mesh race scene).
+double weight_of(const Light& l, double scene_radius) {
+    const double flux = l.power(scene_radius);
+    switch (l.type) {
+        case LightType::Point:
+        case LightType::Spot: return flux / 4;
+        case LightType::Rect:
+        case LightType::Ellipse:
+        case LightType::Triangle: return l.two_sided ? flux / 2 : flux;
+        default: return flux;
+    }
+}
+
+}  // namespace
+
 std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
                                                               double scene_radius) {
     Bounds b;
@@ -198,7 +222,7 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
             // A sphere light is a disk facing the receiver: it leaves up to 90°
             // off the direction to x; a delta light only along it.
             b.cos_theta_e = l.radius > 0 ? 0.0 : 1.0;
-            b.power = l.power(scene_radius);
+            b.power = weight_of(l, scene_radius);
             b.finish();
             return b;
         }
@@ -210,7 +234,7 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
     b.cos_theta_o = 1;
     b.cos_theta_e = l.spread < kPi ? std::cos(0.5 * l.spread) : 0.0;
     b.two_sided = l.two_sided;
-    b.power = l.power(scene_radius);
+    b.power = weight_of(l, scene_radius);
     b.finish();
     return b;
 }

@@ -236,6 +236,102 @@ TEST_CASE("the plan picks the light tree by default for many emitters", "[select
     CHECK(parse_technique("tree/area")->selection == LightSelection::Tree);
 }
 
+namespace {
+
+std::vector<std::string> plan_names(const Scene& scene) {
+    std::vector<Technique> techniques;
+    std::vector<int> samples;
+    default_techniques(scene, techniques, samples);
+    std::vector<std::string> names;
+    for (const Technique& t : techniques) names.push_back(t.name());
+    return names;
+}
+
+// An emissive grid of g × g quads (2 triangles each) of side `size` at height z.
+void add_emissive_grid(Scene& scene, int g, double size, double z) {
+    std::vector<Vec3> positions;
+    std::vector<std::array<std::uint32_t, 3>> triangles;
+    for (int j = 0; j <= g; ++j)
+        for (int i = 0; i <= g; ++i)
+            positions.push_back(Vec3(size * (double(i) / g - 0.5), size * (double(j) / g - 0.5), z));
+    for (int j = 0; j < g; ++j)
+        for (int i = 0; i < g; ++i) {
+            const std::uint32_t a = std::uint32_t(j * (g + 1) + i);
+            triangles.push_back({a, a + 1, a + std::uint32_t(g) + 2});
+            triangles.push_back({a, a + std::uint32_t(g) + 2, a + std::uint32_t(g) + 1});
+        }
+    scene.add_mesh(positions, triangles, Vec3(1, 1, 1));
+}
+
+}  // namespace
+
+// Many emitters: one technique (one sequence of N samples beats three of N/3;
+// effect_plan.cpp has the measurements), cosine sampling beside it only where
+// emitters cover much of the hemisphere.
+TEST_CASE("among many emitters the plan draws from the light tree alone, with bsdf for a "
+          "world or a huge emissive mesh",
+          "[selection]") {
+    ManyLights many;  // a 2 m panel under 100 rects spread over 6 m: nothing huge
+    CHECK(plan_names(many.scene) == std::vector<std::string>{"tree/solid-angle"});
+
+    Scene small_panel;  // 0.5 m of 128 triangles over a 2 m floor
+    add_emissive_grid(small_panel, 8, 0.5, 1.0);
+    small_panel.add_mesh({{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}}, {{0, 1, 2}, {0, 2, 3}});
+    small_panel.commit();
+    CHECK(plan_names(small_panel) == std::vector<std::string>{"tree/solid-angle"});
+
+    // The same triangles, each small, make a 4 m panel over the floor: huge.
+    Scene huge_panel;
+    add_emissive_grid(huge_panel, 8, 4.0, 0.3);
+    huge_panel.add_mesh({{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}}, {{0, 1, 2}, {0, 2, 3}});
+    huge_panel.commit();
+    CHECK(plan_names(huge_panel) == std::vector<std::string>{"tree/solid-angle", "bsdf"});
+
+    Scene with_world;
+    add_emissive_grid(with_world, 8, 0.5, 1.0);
+    with_world.add_light(make_world_light(Vec3(1, 1, 1) * 0.2));
+    with_world.commit();
+    CHECK(plan_names(with_world) == std::vector<std::string>{"tree/solid-angle", "bsdf"});
+}
+
+// Two lights that give x the same irradiance, placed symmetrically about its
+// normal, must be drawn about equally often whatever their kinds: the tree
+// weighs its bounds by irradiance, not by flux (a two-sided light's flux
+// counts a side x cannot see; a point light's is 4π I against π I).
+TEST_CASE("the light tree weighs lights of different kinds by the irradiance they give",
+          "[selection]") {
+    const Vec3 x(0, 0, 0), n(0, 0, 1);
+    const double s = 0.001, r = 1 / std::sqrt(2.0);  // 1 mm lights, 1.4 m away
+    const Vec3 radiance(2, 2, 2);
+    // Facing x from (1, 0, 1): cross(edge_u, edge_v) points toward x.
+    auto right = [&](bool two_sided) {
+        const Vec3 eu(0, s, 0), ev(s * r, 0, -s * r);
+        return make_rect_light(Vec3(1, 0, 1) - (eu + ev) * 0.5, eu, ev, radiance, two_sided, kPi);
+    };
+    // The same from (−1, 0, 1).
+    auto left = [&](bool two_sided) {
+        const Vec3 eu(-s * r, 0, -s * r), ev(0, s, 0);
+        return make_rect_light(Vec3(-1, 0, 1) - (eu + ev) * 0.5, eu, ev, radiance, two_sided, kPi);
+    };
+    // A sphere light of intensity L·A: at this distance its irradiance is the rect's.
+    const Light point = make_point_light(Vec3(-1, 0, 1), radiance * (s * s), 1e-5);
+    const std::vector<std::pair<Light, Light>> pairs = {
+        {right(false), left(false)}, {right(false), left(true)}, {right(true), left(false)},
+        {right(false), point}};
+    for (const auto& [a, b] : pairs) {
+        const std::vector<Light> lights = {a, b};
+        const LightSelector tree(LightSelector::Kind::Tree, lights, all_ids(2), 10.0);
+        const double pa = tree.pmf(x, n, 0), pb = tree.pmf(x, n, 1);
+        INFO("two-sided " << a.two_sided << ", " << b.two_sided << "; point " << (b.type == LightType::Point));
+        CHECK(pa + pb == Approx(1.0));
+        // The bounds of a 1 mm light seen from 1.4 m subtend θb < 1e-3 rad:
+        // each cosine bound exceeds the exact cosine (45°) by a factor
+        // < 1 + θb·tan 45°, so the pmfs differ from 1/2 by < 1e-3 relative.
+        // (Weighed by flux, the two-sided pair gave 1/3 and 2/3, the point 1/5.)
+        CHECK(pa == Approx(0.5).epsilon(1e-3));
+    }
+}
+
 TEST_CASE("the emitter shapes find every area light a direction crosses", "[selection]") {
     // Rects, ellipses (both facing ways) and an emissive mesh around x: every
     // light whose exact shape a random direction crosses must be among the
