@@ -177,6 +177,9 @@ struct PointLighting::Impl {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
     };
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
+    // Light l's own part of the integrand along w (visible from x or not).
+    Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
+                              const Vec3& w);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
     // choose_lights' per-point table for a whole footprint (its probes: the
@@ -302,6 +305,16 @@ struct PointLighting::Impl {
         double pdf = 0;
         std::uint64_t point = ~0ull;  // point_serial_ of the draw
     } drawn_;
+    // Whether a point with one light technique estimates each drawn light's
+    // own part (take_sample). Not among emissive triangles: the triangles of
+    // a closed mesh overlap along most directions (a sphere's far side behind
+    // its near side), and a draw of an occluded far triangle would then add
+    // nothing where the density of all of them along ω spreads the weight
+    // (bench_emitters_quality, 32 spp: emissive_mesh 1.7×, sphere_near 2.9×
+    // the variance; among analytic lights the same variance at 0.8× the CPU).
+    const bool own_light_estimates_ = std::none_of(
+        p_.scene.lights().begin(), p_.scene.lights().end(),
+        [](const Light& l) { return l.type == LightType::Triangle; });
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -687,6 +700,31 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     return f;
 }
 
+PointLighting::Impl::Integrand PointLighting::Impl::light_integrand(std::uint32_t l,
+                                                                    const Vec3& x,
+                                                                    const Vec3& n,
+                                                                    const Vec3& ng,
+                                                                    const Vec3& w) {
+    Integrand f;
+    const double cos_theta = dot(n, w);
+    if (!(cos_theta > 0)) return f;
+    const Light& light = p_.scene.lights()[l];
+    const auto e = emitted_radiance(light, x, w);
+    if (!e || !(luminance(e->radiance) > 0)) return f;
+    if (p_.plan.shadow_rays && light.cast_shadow) {
+        // Up to the emitting point; a triangle's own surface (or a coplanar
+        // neighbour at its depth) does not shadow it, as in integrand().
+        const Vec3 origin = offset_ray_origin(x, ng, w);
+        double depth = e->distance - length(origin - x);
+        if (light.type == LightType::Triangle) depth *= 1 - kEmitterDepthTolerance;
+        ++counters.rays;
+        if (p_.scene.geometry().occluded(origin, w, 0, depth)) return f;
+    }
+    (light.visible_to_bsdf ? f.main : f.hidden) =
+        e->radiance * receiver_cosine_factor(p_.settings.receiver, cos_theta);
+    return f;
+}
+
 double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
@@ -922,11 +960,18 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     if (t.bsdf || drawn.slot < 0) sequence.get_2d(index, 2, u1, u2);
     Vec3 w;
     bool ok;
+    // The point's only technique draws lights: no weights to form, so a
+    // sample may estimate its own light's part, f_l / (P(l) p_l(ω)), which
+    // sums over lights to the whole integral. It needs neither the other
+    // lights along ω (their densities and radiance: an all-hits query, a tree
+    // walk each) nor a closest hit, only an occlusion ray up to the light.
+    std::optional<SelectedLight> light;
+    const bool own_light_only =
+        own_light_estimates_ && active.all.size() == 1 && !t.bsdf && !pilot_;
     if (t.bsdf) {
         w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
         ok = dot(w, p.n) > 0;
     } else {
-        std::optional<SelectedLight> light;
         if (drawn.slot >= 0) {
             const LightChoice& c = choices_[k];
             light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
@@ -938,6 +983,19 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
+        const double own_pdf = ok && own_light_only ? light->pmf * s->pdf : 0.0;
+        if (ok && own_light_only && !(own_pdf > 0 && std::isfinite(own_pdf))) ok = false;
+        if (ok && own_light_only) {
+            const double pdf = own_pdf;
+            const Integrand f = light_integrand(light->light, p.x, p.n, p.ng, w);
+            const double main_f[3] = {f.main.x, f.main.y, f.main.z};
+            const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
+            for (int e = 0; e < n_into; ++e) {
+                into[e].main->add_sample(0, &pdf, main_f);
+                if (hidden_index >= 0) into[e].hidden->add_sample(0, &pdf, hidden_f);
+            }
+            return;
+        }
     }
     // Every technique's density at the sample's own position: the position
     // density is the same for all of them, so the MIS weights are those of
