@@ -38,11 +38,13 @@ double planar_extent(const Light& l) {
 // Uniform selection then costs little where the unoccluded weights are right
 // and wins where occlusion makes them wrong. Distant lights' power depends on
 // the scene's size and does not compare with a lamp's.
-bool comparable_local_lights(const Scene& scene) {
+// With `without_world`, a world is left out of the comparison (it is left to
+// `bsdf`: world_left_to_bsdf).
+bool comparable_local_lights(const Scene& scene, bool without_world) {
     double lo = 0, hi = 0;
     bool any = false;
     for (const Light& l : scene.lights()) {
-        if (l.is_delta()) continue;
+        if (l.is_delta() || (without_world && l.type == LightType::World)) continue;
         if (l.type == LightType::Sun || l.type == LightType::World) return false;
         const double p = l.power(scene.bounding_radius());
         lo = any ? std::min(lo, p) : p;
@@ -50,6 +52,36 @@ bool comparable_local_lights(const Scene& scene) {
         any = true;
     }
     return any && lo > 0 && hi <= kComparablePower * lo;
+}
+
+// Whether a scene's world, a constant radiance over the hemisphere, is left to
+// the `bsdf` technique alone, out of the light techniques' selection, as
+// Cycles leaves a constant world to its BSDF rays. For a Lambert receiver
+// cosine sampling is exactly the world's own sampler, so `bsdf` integrates it
+// as well as a light technique would, while a light technique that also
+// selects the world spends a share of its draws on it and adds the
+// selection's variance to the local emitters' estimate. Applies when the
+// techniques include `bsdf` (which then covers every direction: unbiased),
+// some other integrated light remains for the light techniques, and these
+// select from per-point tables (at most kManyIntegratedLights lights, no
+// `tree`): the shared selectors hold every integrated light.
+bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techniques,
+                        const std::vector<int>& samples) {
+    int integrated = 0;
+    bool world = false;
+    for (const Light& l : scene.lights()) {
+        if (l.is_delta()) continue;
+        ++integrated;
+        world = world || (l.type == LightType::World && l.visible_to_bsdf);
+    }
+    if (!world || integrated < 2 || integrated > kManyIntegratedLights) return false;
+    bool bsdf = false;
+    for (std::size_t k = 0; k < techniques.size(); ++k) {
+        if (k < samples.size() && samples[k] <= 0) continue;
+        if (techniques[k].bsdf) bsdf = true;
+        else if (techniques[k].selection == LightSelection::Tree) return false;
+    }
+    return bsdf;
 }
 
 }  // namespace
@@ -73,6 +105,7 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         any_projectable = any_projectable || has_planar_projection(l);
     }
     plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
+    plan.world_by_bsdf = world_left_to_bsdf(scene, techniques, samples);
     if (plan.delta_lights > kManyDeltaLights) {
         plan.sample_delta_lights = true;
         for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
@@ -127,6 +160,8 @@ std::string EffectPlan::to_string() const {
           << delta_samples << " per round drawn by a light tree (unbiased)\n";
     if (bsdf_invisible_lights)
         s << "  some lights are hidden from BSDF rays: light techniques integrate them alone\n";
+    if (world_by_bsdf)
+        s << "  the world is left to bsdf (as Cycles): light techniques draw the other lights\n";
     s << "  techniques:\n";
     for (std::size_t k = 0; k < techniques.size(); ++k) {
         s << "    " << (enabled[k] ? "+ " : "- ") << techniques[k].name();
@@ -141,11 +176,12 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     techniques.clear();
     samples.clear();
     int integrated = 0;
-    bool world = false, emissive_meshes = false, huge = false;
+    bool world = false, bsdf_world = false, emissive_meshes = false, huge = false;
     for (const Light& l : scene.lights()) {
         if (l.is_delta()) continue;
         ++integrated;
         world = world || l.type == LightType::World;
+        bsdf_world = bsdf_world || (l.type == LightType::World && l.visible_to_bsdf);
         emissive_meshes = emissive_meshes || l.type == LightType::Triangle;
         // A light as wide as the scene covers much of the hemisphere of points
         // near it and crosses their horizon; uniform solid angle then spends its
@@ -159,6 +195,11 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         samples.push_back(count);
     };
     if (integrated == 0) return;
+    // A world among few other lights is left to `bsdf` (world_left_to_bsdf);
+    // the light technique below then chooses among the others alone.
+    const bool world_to_bsdf = bsdf_world && integrated >= 2 &&
+                               integrated <= kManyIntegratedLights;
+    const int lamps = integrated - (world_to_bsdf ? 1 : 0);
     // One light: one technique, not a pair: each technique draws from its own
     // low-discrepancy sequence, and two sequences of N/2 points converge far
     // slower than one of N on these smooth integrands. Measured per sample on
@@ -166,7 +207,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // alike): solid angle alone against solid angle + area 30× lower on one
     // rect, 6× on a disk 3 cm above the receiver, 2.6× on a sun (whose two
     // samplers are one).
-    if (integrated == 1) {
+    if (lamps == 1) {
         add("uniform/solid-angle", 1);
     } else if (integrated > kManyIntegratedLights) {
         // Many emitters: the exact unoccluded weights would cost O(L) per
@@ -175,7 +216,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         add("tree/solid-angle", 1);
         add("power/solid-angle", 1);
         if (world || emissive_meshes) add("bsdf", 1);
-    } else if (comparable_local_lights(scene)) {
+    } else if (comparable_local_lights(scene, world_to_bsdf)) {
         // Several local lights of about the same power: each drawn equally
         // often. Every light then keeps an equal, well-stratified share of
         // the one sequence, and no light is starved where occlusion makes
@@ -185,20 +226,20 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // unchanged; `unoccluded` alone was worse than `defensive` on all.
         add("uniform/solid-angle", 1);
     } else {
-        // Several lights of unequal power, or a sun or world among them: one
+        // Several lights of unequal power, or a sun among them: one
         // technique again, selecting half by unoccluded contribution (the
         // paper's "trained" technique) and half uniformly, so lights that
         // occlusion hides from the unoccluded weights keep their share
         // (`unoccluded` alone starved the demo room's floor under its table).
         // One sequence of N samples instead of a pair's two of N/2: see
-        // bench_cycles' error per sample (README, issue 9). With a world,
-        // uniform selection gave the world a third of the samples
-        // (emission_world: 1.81 → 3.05 × Cycles' error per sample).
+        // bench_cycles' error per sample (README, issue 9).
         add("defensive/solid-angle", 1);
     }
-    // Huge lights are what cosine sampling is good at (a world is drawn by
-    // cosine already, by the light techniques).
-    if (huge && (integrated <= kManyIntegratedLights || !(world || emissive_meshes)))
+    // The world left to `bsdf`; huge lights are what cosine sampling is good
+    // at (a world in the light techniques is drawn by cosine already).
+    const bool has_bsdf = integrated > kManyIntegratedLights && (world || emissive_meshes);
+    if (!has_bsdf && (world_to_bsdf ||
+                      (huge && (integrated <= kManyIntegratedLights || !(world || emissive_meshes)))))
         add("bsdf", 1);
 }
 

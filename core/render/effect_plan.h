@@ -18,6 +18,10 @@ struct EffectPlan {
     int delta_lights = 0;        // one shadow ray each, outside MIS
     bool shadow_rays = false;    // some occluding geometry exists
     bool bsdf_invisible_lights = false;  // lights only light techniques may see
+    // The (constant) world is left to the `bsdf` technique, as Cycles leaves a
+    // constant world to its BSDF rays: light techniques then draw only the
+    // local emitters. See world_left_to_bsdf (effect_plan.cpp) for when.
+    bool world_by_bsdf = false;
     // Many delta lights: their sum is estimated by drawing delta_samples of
     // them per round from a light tree instead of one shadow ray each.
     bool sample_delta_lights = false;
