@@ -65,12 +65,17 @@ TEST_CASE("the effect plan draws comparable local lights uniformly, others defen
     CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 1),
                          make_world_light(Vec3(0.001, 0.001, 0.001))}) ==
           "uniform/solid-angle");  // a world among the lights is bsdf's: one light left
+    // A minor world (power 0.6 against 31 and 9) is bsdf's: the lamps decide.
     CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 9), ceiling_rect(1.0, -0.5, 1.5, 1),
-                         make_world_light(Vec3(1, 1, 1))}) ==
+                         make_world_light(Vec3(0.01, 0.01, 0.01))}) ==
           "defensive/solid-angle");  // powers 9:1 besides the world
     CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 2), ceiling_rect(1.0, -0.5, 1.5, 1),
-                         make_world_light(Vec3(1, 1, 1))}) ==
+                         make_world_light(Vec3(0.01, 0.01, 0.01))}) ==
           "uniform/solid-angle");  // powers 2:1 besides the world
+    // The world as the main light (power 64 against 9) stays in the selection.
+    CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 2), ceiling_rect(1.0, -0.5, 1.5, 1),
+                         make_world_light(Vec3(1, 1, 1))}) ==
+          "defensive/solid-angle");
     CHECK(selection_for({ceiling_rect(-0.5, -0.5, 1, 1),
                          make_sun_light(Vec3(0, 0, -1), Vec3(1, 1, 1), 0.1)}) ==
           "defensive/solid-angle");  // a sun among the lights
@@ -135,8 +140,9 @@ WorldPlan world_plan(const std::vector<Light>& lights, const std::vector<std::st
 
 }  // namespace
 
-TEST_CASE("the effect plan leaves a world among few lights to bsdf", "[plan]") {
-    const Light world = make_world_light(Vec3(0.5, 0.5, 0.5));
+TEST_CASE("the effect plan leaves a minor world among few lights to bsdf", "[plan]") {
+    // Power π²·0.05·R² = 0.5 (R = 1.01, the lamp's far corner) against the lamp's 2.5.
+    const Light world = make_world_light(Vec3(0.05, 0.05, 0.05));
     // Small for the scene: the huge-light rule adds no bsdf of its own.
     const Light lamp = make_rect_light(Vec3(-0.1, -0.1, 1), Vec3(0, 0.2, 0), Vec3(0.2, 0, 0),
                                        Vec3(20, 20, 20), false, kPi);
@@ -160,6 +166,13 @@ TEST_CASE("the effect plan leaves a world among few lights to bsdf", "[plan]") {
     p = world_plan({lamp, hidden});
     CHECK(p.names == Names{"defensive/solid-angle"});
     CHECK_FALSE(p.world_by_bsdf);
+    // A world that is the main light (power 10 against 2.5) keeps its draws
+    // in the light technique's selection, bsdf or not.
+    const Light bright = make_world_light(Vec3(1, 1, 1));
+    p = world_plan({lamp, bright});
+    CHECK(p.names == Names{"defensive/solid-angle"});
+    CHECK_FALSE(p.world_by_bsdf);
+    CHECK_FALSE(world_plan({lamp, bright}, {"defensive/solid-angle", "bsdf"}).world_by_bsdf);
     // Many lights: the tree plan, its selectors over every light.
     std::vector<Light> many{world};
     for (int i = 0; i <= kManyIntegratedLights; ++i) many.push_back(ceiling_rect(i, 0, 2, 1));
@@ -174,7 +187,7 @@ TEST_CASE("a world left to bsdf keeps the exact answer where an occluder hides p
     // beside the light hides part of the world (and none of the light) from x.
     // Lambert receiver (albedo 1): E/π = (L·I_rect + Lw·(π − I_occluder))/π,
     // with I the cosine-weighted solid angles (polygon_irradiance).
-    const double L = 2, Lw = 0.5;
+    const double L = 2, Lw = 0.1;  // powers 2π and π²·Lw·R² = 2.7 (R = 1.66): minor
     const Vec3 x(-0.1, 0, 0), n(0, 0, 1);
     const std::vector<Vec3> occluder = rect({0.5, -0.5, 0.5}, {1, 0, 0}, {0, 1, 0});
     Scene scene;
