@@ -38,8 +38,8 @@ double planar_extent(const Light& l) {
 // Uniform selection then costs little where the unoccluded weights are right
 // and wins where occlusion makes them wrong. Distant lights' power depends on
 // the scene's size and does not compare with a lamp's.
-// With `without_world`, a world is left out of the comparison (it is left to
-// `bsdf`: world_left_to_bsdf).
+// With `without_world`, a world is left out of the comparison (a minor world
+// is left to `bsdf`: minor_world).
 bool comparable_local_lights(const Scene& scene, bool without_world) {
     double lo = 0, hi = 0;
     bool any = false;
@@ -250,9 +250,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // The world left to `bsdf`; huge lights are what cosine sampling is good
     // at (a world in the light techniques is drawn by cosine already).
     const bool has_bsdf = integrated > kManyIntegratedLights && (world || emissive_meshes);
-    if (!has_bsdf && (world_to_bsdf ||
-                      (huge && (integrated <= kManyIntegratedLights || !(world || emissive_meshes)))))
-        add("bsdf", 1);
+    if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", 1);
 }
 
 }  // namespace omis
