@@ -1489,7 +1489,9 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         if (plan.enabled[k]) techniques.push_back(int(k));
     for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
         const Light& light = scene.lights()[l];
-        (light.is_delta() ? delta : integrated).push_back(l);
+        // A world left to `bsdf` is no light technique's to select.
+        const bool bsdf_only = plan.world_by_bsdf && light.type == LightType::World;
+        if (!bsdf_only) (light.is_delta() ? delta : integrated).push_back(l);
         power.push_back(light.power(scene.bounding_radius()));
         tiny_shapes.push_back(tiny_shape_of(light));
     }

@@ -49,11 +49,13 @@ double mesh_extent(const Mesh& mesh) {
 // Uniform selection then costs little where the unoccluded weights are right
 // and wins where occlusion makes them wrong. Distant lights' power depends on
 // the scene's size and does not compare with a lamp's.
-bool comparable_local_lights(const Scene& scene) {
+// With `without_world`, a world is left out of the comparison (a minor world
+// is left to `bsdf`: minor_world).
+bool comparable_local_lights(const Scene& scene, bool without_world) {
     double lo = 0, hi = 0;
     bool any = false;
     for (const Light& l : scene.lights()) {
-        if (l.is_delta()) continue;
+        if (l.is_delta() || (without_world && l.type == LightType::World)) continue;
         if (l.type == LightType::Sun || l.type == LightType::World) return false;
         const double p = l.power(scene.bounding_radius());
         lo = any ? std::min(lo, p) : p;
@@ -61,6 +63,50 @@ bool comparable_local_lights(const Scene& scene) {
         any = true;
     }
     return any && lo > 0 && hi <= kComparablePower * lo;
+}
+
+// Whether a scene's world, a constant radiance over the hemisphere, is left to
+// `bsdf` alone (given a `bsdf` technique), out of the light techniques'
+// selection, as Cycles leaves a constant world to its BSDF rays: when it is a
+// minor light, its power at most kMinorWorldPower times the other integrated
+// lights' together, with at most kManyIntegratedLights lights in all (the
+// shared selectors of many lights hold the world too). Cosine sampling is
+// the world's own sampler for a Lambert receiver, so `bsdf` integrates it as
+// well as a light technique would, and the light technique's draws go to the
+// emitters that matter. A world that is the main light stays in the
+// selection, where `defensive` gives it most draws: a world seen through an
+// opening is noisy by cosine sampling and needs them. Measured per sample
+// against Cycles (bench_cycles --equal-samples, 128², optimal, relMSE ratio):
+// emission_world (world 0.34× the emitter's power) 1.72 → 1.45 left to bsdf;
+// world_window (a skylit room, world 29× the lamp's) 1.47 → 3.37 left to bsdf.
+bool minor_world(const Scene& scene) {
+    int integrated = 0;
+    double world = -1, others = 0;
+    for (const Light& l : scene.lights()) {
+        if (l.is_delta()) continue;
+        ++integrated;
+        const double p = l.power(scene.bounding_radius());
+        if (l.type == LightType::World && l.visible_to_bsdf)
+            world = p;
+        else
+            others += p;
+    }
+    return world >= 0 && integrated >= 2 && integrated <= kManyIntegratedLights &&
+           world <= kMinorWorldPower * others;
+}
+
+// minor_world, and the techniques include `bsdf` (which then covers every
+// direction: unbiased) and no `tree` (its selector holds every light).
+bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techniques,
+                        const std::vector<int>& samples) {
+    if (!minor_world(scene)) return false;
+    bool bsdf = false;
+    for (std::size_t k = 0; k < techniques.size(); ++k) {
+        if (k < samples.size() && samples[k] <= 0) continue;
+        if (techniques[k].bsdf) bsdf = true;
+        else if (techniques[k].selection == LightSelection::Tree) return false;
+    }
+    return bsdf;
 }
 
 }  // namespace
@@ -84,6 +130,7 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         any_projectable = any_projectable || has_planar_projection(l);
     }
     plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
+    plan.world_by_bsdf = world_left_to_bsdf(scene, techniques, samples);
     if (plan.delta_lights > kManyDeltaLights) {
         plan.sample_delta_lights = true;
         for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
@@ -138,6 +185,8 @@ std::string EffectPlan::to_string() const {
           << delta_samples << " per round drawn by a light tree (unbiased)\n";
     if (bsdf_invisible_lights)
         s << "  some lights are hidden from BSDF rays: light techniques integrate them alone\n";
+    if (world_by_bsdf)
+        s << "  the world is left to bsdf (as Cycles): light techniques draw the other lights\n";
     s << "  techniques:\n";
     for (std::size_t k = 0; k < techniques.size(); ++k) {
         s << "    " << (enabled[k] ? "+ " : "- ") << techniques[k].name();
@@ -172,6 +221,10 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         samples.push_back(count);
     };
     if (integrated == 0) return;
+    // A minor world among few other lights is left to `bsdf`
+    // (world_left_to_bsdf); the light technique below chooses among the others.
+    const bool world_to_bsdf = minor_world(scene);
+    const int lamps = integrated - (world_to_bsdf ? 1 : 0);
     // One light: one technique, not a pair: each technique draws from its own
     // low-discrepancy sequence, and two sequences of N/2 points converge far
     // slower than one of N on these smooth integrands. Measured per sample on
@@ -179,7 +232,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // alike): solid angle alone against solid angle + area 30× lower on one
     // rect, 6× on a disk 3 cm above the receiver, 2.6× on a sun (whose two
     // samplers are one).
-    if (integrated == 1) {
+    if (lamps == 1) {
         add("uniform/solid-angle", 1);
     } else if (integrated > kManyIntegratedLights) {
         // Many emitters: the exact unoccluded weights would cost O(L) per
@@ -195,7 +248,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // receiver, tree + bsdf had half the variance of the tree alone.
         add("tree/solid-angle", 1);
         if (world) add("bsdf", 1);
-    } else if (comparable_local_lights(scene)) {
+    } else if (comparable_local_lights(scene, world_to_bsdf)) {
         // Several local lights of about the same power: each drawn equally
         // often. Every light then keeps an equal, well-stratified share of
         // the one sequence, and no light is starved where occlusion makes
@@ -205,20 +258,20 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // unchanged; `unoccluded` alone was worse than `defensive` on all.
         add("uniform/solid-angle", 1);
     } else {
-        // Several lights of unequal power, or a sun or world among them: one
+        // Several lights of unequal power, or a sun among them: one
         // technique again, selecting half by unoccluded contribution (the
         // paper's "trained" technique) and half uniformly, so lights that
         // occlusion hides from the unoccluded weights keep their share
         // (`unoccluded` alone starved the demo room's floor under its table).
         // One sequence of N samples instead of a pair's two of N/2: see
-        // bench_cycles' error per sample (README, issue 9). With a world,
-        // uniform selection gave the world a third of the samples
-        // (emission_world: 1.81 → 3.05 × Cycles' error per sample).
+        // bench_cycles' error per sample (README, issue 9).
         add("defensive/solid-angle", 1);
     }
-    // Huge lights are what cosine sampling is good at (a world is drawn by
-    // cosine already, by the light techniques).
-    if (huge && !(integrated > kManyIntegratedLights && world)) add("bsdf", 1);
+    // The world left to `bsdf`; huge lights are what cosine sampling is good
+    // at (a world in the light techniques is drawn by cosine already, and
+    // among many emitters `bsdf` joins the tree for the world above).
+    const bool has_bsdf = integrated > kManyIntegratedLights && world;
+    if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", 1);
 }
 
 }  // namespace omis

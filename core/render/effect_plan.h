@@ -18,6 +18,10 @@ struct EffectPlan {
     int delta_lights = 0;        // one shadow ray each, outside MIS
     bool shadow_rays = false;    // some occluding geometry exists
     bool bsdf_invisible_lights = false;  // lights only light techniques may see
+    // The (constant) world is left to the `bsdf` technique, as Cycles leaves a
+    // constant world to its BSDF rays: light techniques then draw only the
+    // local emitters. When the world is a minor light (kMinorWorldPower).
+    bool world_by_bsdf = false;
     // Many delta lights: their sum is estimated by drawing delta_samples of
     // them per round from a light tree instead of one shadow ray each.
     bool sample_delta_lights = false;
@@ -41,7 +45,8 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
 // shape sampling: one technique for one light; for several (≤ 16), uniform
 // selection when they are local and of comparable power, else defensive
 // selection; tree + power for many; plus bsdf for many lights with a world or
-// an emissive mesh, and for a huge light.
+// an emissive mesh, for a huge light, and for a minor world among few lights
+// (left to bsdf; the light technique then selects among the others).
 // Beyond these counts the plan stops looping over lights per point: delta
 // lights are drawn from a light tree, and the default light technique selects
 // by the tree instead of by exact unoccluded irradiance. Integrated lights:
@@ -60,6 +65,10 @@ constexpr int kManyIntegratedLights = 16;
 // sample: 0.36 at r = 4, which the better stratification and the robustness to
 // occlusion measured on the race's scenes (r ≤ 2) outweigh; beyond, not.
 constexpr double kComparablePower = 4.0;
+// A world whose power (over a disk of the scene's radius) is at most this
+// times the other integrated lights' together is a minor light: left to
+// `bsdf` when the techniques have it (effect_plan.cpp, minor_world).
+constexpr double kMinorWorldPower = 1.0;
 
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
                         std::vector<int>& samples);

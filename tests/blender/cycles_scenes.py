@@ -277,6 +277,35 @@ def scene_spread_walls(size=SIZE):
     return objs
 
 
+def scene_world_window(size=SIZE):
+    # Issue 9: a closed room lit by a constant world through a 0.5 m skylight
+    # and by a small lamp inside: the effect plan leaves the world to its BSDF
+    # rays (as Cycles), which must still find the sky through the opening.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    h = 1.5
+    for name, extent, center in (("wall_e", (0.1, 2.2, h), (1.05, 0, h / 2)),
+                                 ("wall_w", (0.1, 2.2, h), (-1.05, 0, h / 2)),
+                                 ("wall_n", (2.2, 0.1, h), (0, 1.05, h / 2)),
+                                 ("wall_s", (2.2, 0.1, h), (0, -1.05, h / 2)),
+                                 # the ceiling around the opening x ∈ [0.05, 0.55],
+                                 # y ∈ [−0.05, 0.45]
+                                 ("ceiling_w", (1.15, 2.2, 0.1), (-0.525, 0, h + 0.05)),
+                                 ("ceiling_e", (0.55, 2.2, 0.1), (0.825, 0, h + 0.05)),
+                                 ("ceiling_s", (0.5, 1.05, 0.1), (0.3, -0.575, h + 0.05)),
+                                 ("ceiling_n", (0.5, 0.65, 0.1), (0.3, 0.775, h + 0.05))):
+        U.add_box(name, extent, center)
+    U.add_light('AREA', "lamp", energy=10.0, location=(-0.5, -0.4, 1.4), shape='SQUARE',
+                size=0.3)
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    bg = world.node_tree.nodes["Background"]
+    bg.inputs["Color"].default_value = (0.5, 0.6, 0.8, 1.0)
+    bg.inputs["Strength"].default_value = 10.0
+    bpy.context.scene.world = world
+    return objs
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
@@ -293,6 +322,7 @@ SCENES = {
     "emissive_mesh": scene_emissive_mesh,
     "disk_near": scene_disk_near,
     "spread_walls": scene_spread_walls,
+    "world_window": scene_world_window,
 }
 
 
