@@ -92,10 +92,12 @@ double level_scale(const double* D, const double* G, int levels) {
 // are epochs 0..l and epoch l + 1 (epochs: rounds [0,1), [1,2), [2,4), ...),
 // so G_l = epoch l + 1's correction sum less theirs. λ depends on every
 // round, the corrected ones too: a bias (Cov(λ, correction)). Measured
-// (bench_hard_cases, 2048 copies, bias/σ rms over points, floor 0.02):
-// ≤ 0.11 at 8 rounds of 8 samples (optimal-direct's level too), ≤ 0.03 at
-// 16; below 3 levels (8 rounds) it showed (4σ over 64 copies at 4 rounds,
-// test_direct_lighting), so there the estimate is balance's (λ = 0).
+// (bench_hard_cases 2048 4096 "" 8,16 8: bias/σ rms over points, floor
+// 0.02; bench/results/hard_cases_one_sequence.txt): ≤ 0.11 at 8 rounds of 8
+// samples, ≤ 0.07 at 16, optimal-direct's level in every case (the plain
+// cross-fit: ≤ 0.04, 0.15 at 16 rounds of 1 — not unbiased either with one
+// sequence). Below 3 levels (8 rounds) it showed (4σ over 64 copies at 4
+// rounds, test_direct_lighting), so there the estimate is balance's (λ = 0).
 //
 // The level test sees only the error that differs between halves. Where
 // balance's error is mostly a rare event the halves both miss (a small far
