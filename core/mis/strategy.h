@@ -13,7 +13,10 @@ enum class Strategy {
     Maximum,
     Cutoff,
     OptimalDirect,       // solve once from all samples: biased, consistent
-    OptimalProgressive,  // cross-fit: each epoch of rounds corrected with α from the others; unbiased
+    // cross-fit: each epoch of rounds corrected with α from the others;
+    // unbiased for independent rounds (with sequence_rounds, the level test's
+    // small bias: mis/estimator.cpp)
+    OptimalProgressive,
 };
 
 struct StrategyOptions {
