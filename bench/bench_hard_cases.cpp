@@ -1,7 +1,8 @@
 // The hard-case suite of issue 10 (tests/hard_cases): per case and sample
 // count, the MSE of optimal-direct and optimal-progressive relative to the
 // balance heuristic, negative and zero texel counts, and bias/σ.
-//   omis_bench_hard_cases [copies] [reference rounds] [case name part] [spp,...]
+//   omis_bench_hard_cases [copies] [reference rounds] [case name part] [spp,...] [per round]
+// (per round: samples of each technique per round, 1 by default, so spp = rounds)
 //   omis_bench_hard_cases --cost STRATEGY SPP TEXELS   (see cost_run)
 //   omis_bench_hard_cases --allocation COPIES          (see allocation_sweep)
 //   omis_bench_hard_cases --allocation-gain COPIES [spp,...]  (see allocation_gain)
@@ -185,19 +186,22 @@ int main(int argc, char** argv) {
     const std::string only = argc > 3 ? argv[3] : "";  // cases whose name holds this
     std::vector<int> counts = {1, 4, 16, 64, 256};
     if (argc > 4) counts = parse_counts(argv[4]);
+    const int per_round = argc > 5 ? std::atoi(argv[5]) : 1;  // samples a technique a round
     if (copies < 2 || reference_rounds < 1 ||
-        std::any_of(counts.begin(), counts.end(), [](int n) { return n < 1; })) {
+        std::any_of(counts.begin(), counts.end(), [](int n) { return n < 1; }) ||
+        per_round < 1) {
         std::fprintf(stderr,
                      "usage: %s [copies ≥ 2] [reference rounds ≥ 1] [case name part] "
-                     "[spp,spp,...]\n",
+                     "[rounds,rounds,...] [samples per technique per round]\n",
                      argv[0]);
         return 2;
     }
     const Strategy strategies[3] = {Strategy::Balance, Strategy::OptimalDirect,
                                     Strategy::OptimalProgressive};
-    std::printf("hard cases: %d copies of 8 points per case, spp = samples per technique\n"
+    std::printf("hard cases: %d copies of 8 points per case, %d sample(s) per technique a round; "
+                "the first column counts rounds\n"
                 "MSE ratios to balance (± 1 standard error of the paired ratio);"
-                " neg/zero texels and bias/σ as bal/dir/prog\n\n", copies);
+                " neg/zero texels and bias/σ as bal/dir/prog\n\n", copies, per_round);
     double worst[2] = {0, 0};
     for (const HardCase& hc : suite()) {
         if (hc.name.find(only) == std::string::npos) continue;
@@ -212,7 +216,10 @@ int main(int argc, char** argv) {
         for (int spp : counts) {
             Errors e[3];
             for (int s = 0; s < 3; ++s)
-                e[s] = errors(run(scene, hc, strategies[s], spp, copies, 42), ref, points, copies);
+                e[s] = errors(run_counts(scene, hc, strategies[s],
+                                         std::vector<int>(hc.techniques.size(), per_round), spp,
+                                         copies, 42),
+                              ref, points, copies);
             double ratio[2], se[2];
             for (int s = 0; s < 2; ++s) {
                 // Delta method for the ratio of two paired means.

@@ -81,6 +81,55 @@ double level_scale(const double* D, const double* G, int levels) {
     return std::min(1.0, slope - slope_variance / slope);
 }
 
+// optimal-progressive with sequence rounds (issue 10): the cross-fit's α is
+// free of the samples it corrects, yet its correction can still lose to
+// balance (1.19 ± 0.12× at 64 spp, tiny bright case, 128 copies): with one
+// scrambled sequence per point the balance estimate converges faster than the
+// independent-draw variances that choose α say, and the corrected estimate
+// does not (measured: the same loss with 4 or 8 folds or leave-one-round-out,
+// so it is not α's noise). So the total correction is scaled by the level
+// test (level_scale) on the corrections actually applied: level l's halves
+// are epochs 0..l and epoch l + 1 (epochs: rounds [0,1), [1,2), [2,4), ...),
+// so G_l = epoch l + 1's correction sum less theirs. λ depends on every
+// round, the corrected ones too: a bias (Cov(λ, correction)). Measured
+// (bench_hard_cases 2048 4096 "" 8,16 8: bias/σ rms over points, floor
+// 0.02; bench/results/hard_cases_one_sequence.txt): ≤ 0.11 at 8 rounds of 8
+// samples, ≤ 0.07 at 16, optimal-direct's level in every case (the plain
+// cross-fit: ≤ 0.04, 0.15 at 16 rounds of 1 — not unbiased either with one
+// sequence). Below 3 levels (8 rounds) it showed (4σ over 64 copies at 4
+// rounds, test_direct_lighting), so there the estimate is balance's (λ = 0).
+//
+// The level test sees only the error that differs between halves. Where
+// balance's error is mostly a rare event the halves both miss (a small far
+// light that the bsdf technique seldom hits: its balance share is then
+// missing from almost every estimate, 2σ low on average), the correction
+// restores that share alike in every half: large in total, near-equal
+// halves (G ≈ 0), and the regression has nothing to go on (λ = 0 lost the
+// whole gain: rms error 3.1 reported σ against 0.03 with the full
+// correction, tests/python/test_scene.py's far receiver). Such a correction
+// is kept whole. Pure noise passes this gate rarely: for independent
+// halves, |A + B| > 8|B − A| has probability (2/π)·atan(1/8) ≈ 8 %, and the
+// level below must agree too.
+constexpr int kProgressiveMinLevels = 3;
+constexpr double kConsistentCorrection = 8;
+
+double cross_fit_level_scale(const double* D, const double* epoch_corrections, int levels,
+                             double total) {
+    constexpr int kLevels = 32;  // MisEstimator::kMaxLevels
+    if (levels < kProgressiveMinLevels || levels > kLevels) return 0.0;
+    double G[kLevels], before = 0;
+    for (int l = 0; l < levels; ++l) {
+        before += epoch_corrections[l];
+        G[l] = epoch_corrections[l + 1] - before;
+    }
+    // A correction the halves agree on is kept whole: its total beyond
+    // kConsistentCorrection times the top level's difference and twice the
+    // level below's (whose halves are half as long).
+    const double spread = std::max(std::abs(G[levels - 1]), 2 * std::abs(G[levels - 2]));
+    if (std::abs(total) > kConsistentCorrection * spread) return 1.0;
+    return level_scale(D, G, levels);
+}
+
 MomentKernel select_moment_kernel(int N, int C) {
     if (C == 3) {
         switch (N) {
@@ -446,13 +495,21 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
         }
         start = end;
     }
-    // No level test here: scaling the cross-fit by it (from all levels) biased
-    // the estimate, and from the levels below each epoch it lost to balance
-    // (issue 10: 1.75× at 64 spp, tiny bright case). The cross-fit stays unbiased.
+    // Sequence rounds: the level test on the cross-fit's own corrections
+    // (cross_fit_level_scale). Independent rounds: the plain cross-fit.
+    double D_all[kMaxLevels * kMaxMisChannels], c_diff[kMaxLevels * kMaxMisTechniques];
+    const int levels = options_.sequence_rounds ? level_differences(D_all, c_diff) : 0;
     for (int c = 0; c < C_; ++c) {
-        double total_correction = 0;
-        for (int e = 0; e <= boundaries; ++e) total_correction += epoch_sum[e][c];
-        out.estimate[c] = balance_estimate(c) + total_correction / rounds_;
+        double total_correction = 0, epoch_c[kMaxLevels + 1], D[kMaxLevels];
+        for (int e = 0; e <= boundaries; ++e) {
+            total_correction += epoch_sum[e][c];
+            epoch_c[e] = epoch_sum[e][c];
+        }
+        for (int l = 0; l < levels; ++l) D[l] = D_all[l * C_ + c];
+        const double scale =
+            options_.sequence_rounds ? cross_fit_level_scale(D, epoch_c, levels, total_correction)
+                                    : 1.0;
+        out.estimate[c] = balance_estimate(c) + scale * total_correction / rounds_;
     }
 }
 
@@ -651,8 +708,9 @@ void MisEstimator::result(MisResult& out) const {
                 // samples. The cross-fit's α is kept only where predicted to
                 // beat balance, so this is an upper estimate where it is used.
                 out.variance[c] = heuristic_variance(c);
-                // Only the sign test: the estimate is unbiased and should stay
-                // so wherever it is a possible value.
+                // Only the sign test: the cross-fit is unbiased (with
+                // sequence rounds, up to the level test's small bias) and
+                // should stay so wherever it is a possible value.
                 if (out_of_range(out.estimate[c], c, 0, 0)) {
                     out.estimate[c] = balance_estimate(c);
                     out.fell_back |= 1 << c;

@@ -13,7 +13,10 @@ enum class Strategy {
     Maximum,
     Cutoff,
     OptimalDirect,       // solve once from all samples: biased, consistent
-    OptimalProgressive,  // cross-fit: each epoch of rounds corrected with α from the others; unbiased
+    // cross-fit: each epoch of rounds corrected with α from the others;
+    // unbiased for independent rounds (with sequence_rounds, the level test's
+    // small bias: mis/estimator.cpp)
+    OptimalProgressive,
 };
 
 struct StrategyOptions {
@@ -21,9 +24,11 @@ struct StrategyOptions {
     double cutoff = 0.1;  // relative threshold a of the cutoff heuristic
     // Optimal strategies: round r holds point r of one scrambled Sobol'
     // sequence per technique (omis's own draws), not independent samples.
-    // Then optimal-direct's α is also judged by the sequence's own halves
-    // (the level test, mis/estimator.cpp), since such draws err far less
-    // than the independent-draw variances rule 3 compares.
+    // Then the correction is also judged by the sequence's own halves (the
+    // level test, mis/estimator.cpp) — optimal-direct's α, and
+    // optimal-progressive's cross-fitted corrections from 8 rounds on
+    // (balance below) — since such draws err far less than the
+    // independent-draw variances rule 3 compares.
     bool sequence_rounds = false;
 };
 

@@ -1,7 +1,10 @@
 // Issue 10's guarantee on the hard-case suite (tests/hard_cases): at 1, 2, 4,
 // 8, 16, 64 and 256 samples per technique (one scrambled sequence a point),
-// optimal-direct's and optimal-progressive's MSE are at most 1.05 × the balance heuristic's, and no estimate is negative
-// (every emitter of the suite emits non-negative radiance).
+// and at 8 and 16 rounds of 8 samples per technique, optimal-direct's and
+// optimal-progressive's MSE are at most 1.05 × the balance heuristic's, and
+// no estimate is negative (every emitter of the suite emits non-negative
+// radiance). Both keep only the part of their correction that the
+// sequence's own halves support (the level test, mis/estimator.cpp).
 //
 // The MSEs come from kCopies independent estimates of each of 8 points per
 // case (fixed seeds), so they are themselves noisy. The test compares them
@@ -59,14 +62,25 @@ TEST_CASE("hard cases: optimal MIS never loses to balance and is never negative"
         const auto ref = reference(scene, hc, 2048, 8, 777);
         // The suite's counts and 2 and 8 between them (2 spp: the fewest
         // rounds with a level to judge α by; issue 10 measured a 1.23× loss there).
-        for (int spp : {1, 2, 4, 8, 16, 64, 256}) {
-            const Errors balance =
-                errors(run(scene, hc, Strategy::Balance, spp, kCopies, 5), ref, points, kCopies);
+        // Then 8 samples per technique a round at 8 and 16 rounds (8 rounds:
+        // the fewest at which optimal-progressive applies its level test; there
+        // it lost 1.10 ± 0.03× before, tiny bright case).
+        struct Run {
+            int per_round, rounds;
+        };
+        for (Run r : {Run{1, 1}, Run{1, 2}, Run{1, 4}, Run{1, 8}, Run{1, 16}, Run{1, 64},
+                      Run{1, 256}, Run{8, 8}, Run{8, 16}}) {
+            const std::vector<int> counts(hc.techniques.size(), r.per_round);
+            auto errors_of = [&](Strategy s) {
+                return errors(run_counts(scene, hc, s, counts, r.rounds, kCopies, 5), ref,
+                              points, kCopies);
+            };
+            const Errors balance = errors_of(Strategy::Balance);
             for (Strategy s : {Strategy::OptimalDirect, Strategy::OptimalProgressive}) {
-                const Errors optimal =
-                    errors(run(scene, hc, s, spp, kCopies, 5), ref, points, kCopies);
+                const Errors optimal = errors_of(s);
                 const PairedExcess excess = paired_excess(optimal, balance);
-                INFO(hc.name << ", " << spp << " spp, " << strategy_name(s) << ": MSE ratio "
+                INFO(hc.name << ", " << r.rounds << " rounds of " << r.per_round << ", "
+                             << strategy_name(s) << ": MSE ratio "
                              << optimal.mse / balance.mse << ", paired excess " << excess.mean
                              << " ± " << excess.standard_error);
                 CHECK(excess.mean <= kSigmas * excess.standard_error);
