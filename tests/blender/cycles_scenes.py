@@ -102,12 +102,7 @@ def scene_emission_world(size=SIZE):
     emitter.name = "emitter"
     emitter.data.materials.append(U.emission_material("Glow", (1.0, 0.8, 0.6), 6.0))
     U.add_box("occluder", (0.4, 0.4, 0.05), (-0.4, 0.0, 0.35))
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (0.3, 0.4, 0.5, 1.0)
-    bg.inputs["Strength"].default_value = 0.5
-    bpy.context.scene.world = world
+    U.constant_world(color=(0.3, 0.4, 0.5), strength=0.5)
     return objs
 
 
@@ -297,12 +292,7 @@ def scene_world_window(size=SIZE):
         U.add_box(name, extent, center)
     U.add_light('AREA', "lamp", energy=10.0, location=(-0.5, -0.4, 1.4), shape='SQUARE',
                 size=0.3)
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    bg = world.node_tree.nodes["Background"]
-    bg.inputs["Color"].default_value = (0.5, 0.6, 0.8, 1.0)
-    bg.inputs["Strength"].default_value = 10.0
-    bpy.context.scene.world = world
+    U.constant_world(color=(0.5, 0.6, 0.8), strength=10.0)
     return objs
 
 

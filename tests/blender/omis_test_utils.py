@@ -76,6 +76,18 @@ def emission_material(name, color=(1.0, 1.0, 1.0), strength=1.0):
     return mat
 
 
+def constant_world(name="World", color=None, strength=1.0):
+    """A node world of one constant Background (colour, strength), made the scene's."""
+    world = bpy.data.worlds.new(name)
+    world.use_nodes = True
+    background = world.node_tree.nodes["Background"]
+    if color is not None:
+        background.inputs["Color"].default_value = (*color, 1.0)
+    background.inputs["Strength"].default_value = strength
+    bpy.context.scene.world = world
+    return world
+
+
 def image_material(name, image):
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True

@@ -159,11 +159,7 @@ def test_light_units():
                        size=0.4, size_y=0.2)
     rect.data.cycles.cast_shadow = False
     rect.data.cycles.use_multiple_importance_sampling = False
-    world = bpy.data.worlds.new("W")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.2, 0.3, 0.4, 1)
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0
-    bpy.context.scene.world = world
+    U.constant_world("W", color=(0.2, 0.3, 0.4), strength=2.0)
     e = run_export([plane])
     by_id = {}
     for light in e.lights:

@@ -33,10 +33,7 @@ def build():
     glow = bpy.context.active_object
     glow.name = "glow"
     glow.data.materials.append(U.emission_material("Glow", strength=4.0))
-    world = bpy.data.worlds.new("World")
-    world.use_nodes = True
-    world.node_tree.nodes["Background"].inputs["Strength"].default_value = 0.2
-    bpy.context.scene.world = world
+    U.constant_world(strength=0.2)
     return receiver, img
 
 

@@ -13,6 +13,7 @@
 #include "render/light_selection.h"
 #include "sampling/irradiance.h"
 #include "sampler_check.h"
+#include "support/lighting_settings.h"
 
 using namespace omis;
 
@@ -238,14 +239,7 @@ TEST_CASE("the plan picks the light tree by default for many emitters", "[select
 
 namespace {
 
-std::vector<std::string> plan_names(const Scene& scene) {
-    std::vector<Technique> techniques;
-    std::vector<int> samples;
-    default_techniques(scene, techniques, samples);
-    std::vector<std::string> names;
-    for (const Technique& t : techniques) names.push_back(t.name());
-    return names;
-}
+using testing::plan_names;
 
 // An emissive grid of g × g quads (2 triangles each) of side `size` at height z.
 void add_emissive_grid(Scene& scene, int g, double size, double z) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "render/direct_lighting.h"
+#include "render/effect_plan.h"
 #include "render/techniques.h"
 
 namespace omis::testing {
@@ -27,6 +28,16 @@ inline DirectLightingSettings lighting_settings(const std::vector<std::string>& 
     s.strategy = strategy;
     s.seed = seed;
     return s;
+}
+
+// The names of the techniques the effect plan chooses for `scene`, in order.
+inline std::vector<std::string> plan_names(const Scene& scene) {
+    std::vector<Technique> techniques;
+    std::vector<int> samples;
+    default_techniques(scene, techniques, samples);
+    std::vector<std::string> names;
+    for (const Technique& t : techniques) names.push_back(t.name());
+    return names;
 }
 
 }  // namespace omis::testing
