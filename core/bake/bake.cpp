@@ -878,9 +878,9 @@ void Baker::run_passes() {
 
 // The share of the pass that ran of what a later pass of its size repeats:
 // all of it, except the first pass's set-up of the tables its points keep
-// (PointLighting::SetupTiming; a third to two thirds of a one-round first
-// pass on the race's many-light scenes, which predicted the second pass 2–3×
-// too long and ended 0.05 s budgets early).
+// (PointLighting::SetupTiming: 8–39 % of a one-round first pass on the
+// race's scenes, which made the second pass look that much longer and could
+// end a 0.05 s budget a round early).
 double Baker::later_pass_share() {
     if (pass_count_ > 0) return 1.0;
     double setup = 0, shading = 0;
