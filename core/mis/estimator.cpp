@@ -14,14 +14,21 @@ namespace omis {
 namespace {
 
 // Pooled moments of SPEC §2 for one sample, with r_k = p_k/q and fq_c = f_c/q:
-// Â (upper triangle) += r rᵀ, ĉ += r, b̂ += r fqᵀ, m̂ += fq². Instantiated for
-// the common sizes so the loops unroll; Nt = Ct = 0 is the general case.
+// Â (upper triangle) += r rᵀ, ĉ += r, b̂ += r fqᵀ, m̂ += fq². r is formed here,
+// (p_k / p_max)·inv_q (q scaled by p_max as in add_sample), and written to
+// r_out; the return value has bit c set where f_c < 0. Instantiated for the
+// common sizes so the loops unroll (per-sample work is what optimal adds over
+// balance); Nt = Ct = 0 is the general case.
 template <int Nt, int Ct>
-void accumulate_moments(int n_rt, int c_rt, const double* __restrict r,
-                        const double* __restrict fq, double* __restrict a,
-                        double* __restrict c_sum, double* __restrict b,
-                        double* __restrict m) {
+inline unsigned accumulate_moments(int n_rt, int c_rt, const double* __restrict pdfs,
+                                   double p_max, double inv_q, const double* __restrict f,
+                                   const double* __restrict fq, double* __restrict r_out,
+                                   double* __restrict a, double* __restrict c_sum,
+                                   double* __restrict b, double* __restrict m) {
     const int N = Nt ? Nt : n_rt, C = Ct ? Ct : c_rt;
+    double r[kMaxMisTechniques];
+#pragma GCC unroll 4
+    for (int i = 0; i < N; ++i) r_out[i] = r[i] = pdfs[i] / p_max * inv_q;
 #pragma GCC unroll 4
     for (int i = 0; i < N; ++i) {
         const double ri = r[i];
@@ -31,12 +38,38 @@ void accumulate_moments(int n_rt, int c_rt, const double* __restrict r,
 #pragma GCC unroll 4
         for (int ch = 0; ch < C; ++ch) b[i * C + ch] += ri * fq[ch];
     }
+    unsigned negative = 0;
 #pragma GCC unroll 4
-    for (int ch = 0; ch < C; ++ch) m[ch] += fq[ch] * fq[ch];
+    for (int ch = 0; ch < C; ++ch) {
+        m[ch] += fq[ch] * fq[ch];
+        negative |= unsigned(f[ch] < 0) << ch;
+    }
+    return negative;
 }
 
-using MomentKernel = void (*)(int, int, const double*, const double*, double*, double*,
-                              double*, double*);
+// accumulate_moments at the sample's sizes, the common ones unrolled. Inlined
+// into add_sample: a call through a pointer (or any call) with these
+// arguments cost a fifth of the kernel (callgrind, hard_cases_cost.txt).
+__attribute__((always_inline)) inline unsigned accumulate_moments_at(
+    int N, int C, const double* pdfs, double p_max, double inv_q, const double* f,
+    const double* fq, double* r, double* a, double* c_sum, double* b, double* m) {
+#define OMIS_MOMENTS(n, c) \
+    accumulate_moments<n, c>(N, C, pdfs, p_max, inv_q, f, fq, r, a, c_sum, b, m)
+    if (C == 3) switch (N) {
+            case 1: return OMIS_MOMENTS(1, 3);
+            case 2: return OMIS_MOMENTS(2, 3);
+            case 3: return OMIS_MOMENTS(3, 3);
+            case 4: return OMIS_MOMENTS(4, 3);
+        }
+    if (C == 1) switch (N) {
+            case 1: return OMIS_MOMENTS(1, 1);
+            case 2: return OMIS_MOMENTS(2, 1);
+            case 3: return OMIS_MOMENTS(3, 1);
+            case 4: return OMIS_MOMENTS(4, 1);
+        }
+    return OMIS_MOMENTS(0, 0);
+#undef OMIS_MOMENTS
+}
 
 // optimal-progressive uses no α solved from fewer than this many samples per
 // free coefficient (+1): an α applied to other samples pays its whole
@@ -130,26 +163,6 @@ double cross_fit_level_scale(const double* D, const double* epoch_corrections, i
     return level_scale(D, G, levels);
 }
 
-MomentKernel select_moment_kernel(int N, int C) {
-    if (C == 3) {
-        switch (N) {
-            case 1: return accumulate_moments<1, 3>;
-            case 2: return accumulate_moments<2, 3>;
-            case 3: return accumulate_moments<3, 3>;
-            case 4: return accumulate_moments<4, 3>;
-        }
-    }
-    if (C == 1) {
-        switch (N) {
-            case 1: return accumulate_moments<1, 1>;
-            case 2: return accumulate_moments<2, 1>;
-            case 3: return accumulate_moments<3, 1>;
-            case 4: return accumulate_moments<4, 1>;
-        }
-    }
-    return accumulate_moments<0, 0>;
-}
-
 }  // namespace
 
 std::optional<Strategy> parse_strategy(std::string_view name) {
@@ -204,7 +217,6 @@ MisEstimator::MisEstimator(Strategy strategy, int num_techniques, int num_channe
         throw std::invalid_argument("beta: must be a positive finite number");
     if (!(options_.cutoff >= 0 && options_.cutoff <= 1))
         throw std::invalid_argument("cutoff: must lie in [0, 1]");
-    moment_kernel_ = select_moment_kernel(N_, C_);
     reset();
 }
 
@@ -221,7 +233,7 @@ void MisEstimator::reset() {
     snapshots_.clear();  // keeps its capacity: no allocation per point
     std::fill(stream_sums_.begin(), stream_sums_.end(), 0.0);
     stream_ = 0;
-    negative_f_.fill(false);
+    negative_f_ = 0;
 }
 
 void MisEstimator::set_streams(int count) {
@@ -370,18 +382,18 @@ void MisEstimator::add_sample(int t, const double* pdfs, const double* f) {
     if (is_optimal(strategy_)) {
         double r[kMaxMisTechniques];
         const double inv_q = 1.0 / q_scaled;  // q_scaled ≥ the largest count: no overflow
-        for (int k = 0; k < N_; ++k) r[k] = pdfs[k] / p_max * inv_q;
-        for (int ch = 0; ch < C_; ++ch) negative_f_[ch] = negative_f_[ch] || f[ch] < 0;
         double* a = moments();
         double* b = a + N_ * N_;
         double* m = b + N_ * C_;
-        moment_kernel_(N_, C_, r, fq, a, m + C_, b, m);
+        negative_f_ |=
+            accumulate_moments_at(N_, C_, pdfs, p_max, inv_q, f, fq, r, a, m + C_, b, m);
         if (streams_ > 0) {
             double* stream = &stream_sums_[stream_ * stream_stride()];
             double* stream_c = stream + C_;
             if (stream_moments()) {  // a, b, m after the rounds entry; c as before
                 double* sa = stream_c + N_ + 1;
-                moment_kernel_(N_, C_, r, fq, sa, stream_c, sa + N_ * N_, sa + N_ * N_ + N_ * C_);
+                accumulate_moments_at(N_, C_, pdfs, p_max, inv_q, f, fq, r, sa, stream_c,
+                                      sa + N_ * N_, sa + N_ * N_ + N_ * C_);
             } else {
                 for (int k = 0; k < N_; ++k) stream_c[k] += r[k];
             }
@@ -592,7 +604,7 @@ double MisEstimator::control_variate(const double* alpha, int c) const {
 
 bool MisEstimator::out_of_range(double estimate, int c, double sigmas,
                                 double balance_variance) const {
-    if (!negative_f_[c] && estimate < 0) return true;
+    if (!(negative_f_ >> c & 1u) && estimate < 0) return true;
     if (sigmas <= 0) return false;
     return std::abs(estimate - balance_estimate(c)) > sigmas * std::sqrt(balance_variance);
 }

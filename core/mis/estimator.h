@@ -164,10 +164,6 @@ private:
     const double* m() const { return b() + N_ * C_; }
     const double* c() const { return m() + C_; }
 
-    // Optimal strategies: the accumulation kernel specialised for N and C.
-    void (*moment_kernel_)(int, int, const double*, const double*, double*, double*,
-                           double*, double*) = nullptr;
-
     // Progressive: the running moments (a, b, m, c) after rounds 1, 2, 4,
     // 8, ..., one block each: the epoch boundaries of the cross-fit.
     std::vector<double> snapshots_;
@@ -186,8 +182,8 @@ private:
     // of Σ p_k/q into c_diff[l*N + k]. Returns the levels.
     static constexpr int kMaxLevels = 32;
     int level_differences(double* D, double* c_diff) const;
-    // Optimal strategies, per channel: whether any sample had f < 0.
-    std::array<bool, kMaxMisChannels> negative_f_{};
+    // Optimal strategies: bit c set where any sample had f_c < 0.
+    unsigned negative_f_ = 0;
 };
 
 }  // namespace omis
