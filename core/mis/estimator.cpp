@@ -275,17 +275,10 @@ void MisEstimator::stream_cross_fit(int s, double* balance, double* corrected) c
     const double* sums = &stream_sums_[s * stream_stride()];
     const double own_rounds = sums[C_ + N_], rest_rounds = rounds_ - own_rounds;
     if (!stream_moments() || !(rest_rounds > 0)) return;
-    // The other streams' moments: the whole's less this stream's, per round.
-    const double* own_a = sums + C_ + N_ + 1;
-    const double* own_b = own_a + N_ * N_;
-    const double* own_m = own_b + N_ * C_;
+    // The other streams' moments: the whole's less this stream's (its a, b, m
+    // follow the rounds entry), per round.
     Moments rest;
-    for (int i = 0; i < N_; ++i)
-        for (int j = i; j < N_; ++j)
-            rest.a[i * N_ + j] = rest.a[j * N_ + i] =
-                (a()[i * N_ + j] - own_a[i * N_ + j]) / rest_rounds;
-    for (int i = 0; i < N_ * C_; ++i) rest.b[i] = (b()[i] - own_b[i]) / rest_rounds;
-    for (int c = 0; c < C_; ++c) rest.m[c] = (m()[c] - own_m[c]) / rest_rounds;
+    moments_without(sums + C_ + N_ + 1, rest_rounds, rest);
     // Applied to other samples, as optimal-progressive's epochs: its rule.
     const SolveResult solved = solve_optimal_alpha(
         N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
@@ -473,7 +466,6 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
     // like the balance terms do; log₂R + 1 solves in all.
     const std::size_t block = moments_size();
     std::vector<double> total(moments(), moments() + block), epoch(block);
-    const double *a_ = a(), *b_ = b(), *m_ = m();
     const int boundaries = int(snapshots_.size() / block);  // at rounds 1, 2, 4, ...
     // Per epoch and channel: the correction summed over the epoch's rounds.
     double epoch_sum[kMaxLevels + 1][kMaxMisChannels] = {};
@@ -487,16 +479,9 @@ void MisEstimator::progressive_estimate(MisResult& out) const {
         const int rest_rounds = rounds_ - (end - start);
         if (rest_rounds > 0) {
             Moments rest;
-            const double* ea = epoch.data();
-            const double* eb = ea + N_ * N_;
-            const double* em = eb + N_ * C_;
-            const double* ec = em + C_;
             const double Rr = rest_rounds;
-            for (int i = 0; i < N_; ++i)
-                for (int j = i; j < N_; ++j)
-                    rest.a[i * N_ + j] = rest.a[j * N_ + i] = (a_[i * N_ + j] - ea[i * N_ + j]) / Rr;
-            for (int i = 0; i < N_ * C_; ++i) rest.b[i] = (b_[i] - eb[i]) / Rr;
-            for (int c = 0; c < C_; ++c) rest.m[c] = (m_[c] - em[c]) / Rr;
+            moments_without(epoch.data(), Rr, rest);
+            const double* ec = epoch.data() + N_ * N_ + N_ * C_ + C_;  // the epoch's c
             const SolveResult solved = solve_optimal_alpha(
                 N_, C_, rest.a.data(), rest.b.data(), rest.m.data(), counts_.data(),
                 Rr * samples_per_round_, kProgressiveSamplesPerCoefficient);
@@ -544,14 +529,17 @@ int MisEstimator::level_differences(double* D, double* c_diff) const {
     return std::max(0, levels);
 }
 
-void MisEstimator::normalized_moments(Moments& out) const {
-    // Divided by the rounds so far: the solver's rules rely on Σ_i n_i a_ij ≈ 1,
+void MisEstimator::moments_without(const double* part, double rounds, Moments& out) const {
+    // Divided by the rounds: the solver's rules rely on Σ_i n_i a_ij ≈ 1,
     // which holds for the per-round normalisation only.
-    const double R = rounds_;
+    auto less = [&](const double* whole, std::size_t at, int i) {
+        return (whole[i] - (part ? part[at + i] : 0.0)) / rounds;
+    };
+    const std::size_t at_b = N_ * N_, at_m = at_b + N_ * C_;
     for (int i = 0; i < N_; ++i)
-        for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = a()[i * N_ + j] / R;
-    for (int i = 0; i < N_ * C_; ++i) out.b[i] = b()[i] / R;
-    for (int c = 0; c < C_; ++c) out.m[c] = m()[c] / R;
+        for (int j = i; j < N_; ++j) out.a[i * N_ + j] = out.a[j * N_ + i] = less(a(), 0, i * N_ + j);
+    for (int i = 0; i < N_ * C_; ++i) out.b[i] = less(b(), at_b, i);
+    for (int c = 0; c < C_; ++c) out.m[c] = less(m(), at_m, c);
 }
 
 bool MisEstimator::without_n(const double* alpha, int c, double* beta) const {

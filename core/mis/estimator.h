@@ -117,7 +117,11 @@ private:
         std::array<double, kMaxMisTechniques * kMaxMisChannels> b;
         std::array<double, kMaxMisChannels> m;
     };
-    void normalized_moments(Moments& out) const;
+    void normalized_moments(Moments& out) const { moments_without(nullptr, rounds_, out); }
+    // The moments of every round so far less those in `part` (a block laid
+    // out as moments(): a, b, m; null: none), divided by `rounds`, the rounds
+    // left: the other rounds' moments, from which a cross-fit solves.
+    void moments_without(const double* part, double rounds, Moments& out) const;
     // Balance estimate plus the control-variate correction for α (N×C).
     double control_variate(const double* alpha, int c) const;
     double heuristic_variance(int c) const;
