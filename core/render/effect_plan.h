@@ -44,9 +44,10 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
 // scene (what a bake uses when the caller names none), all with solid-angle
 // shape sampling: one technique for one light; for several (≤ 16), uniform
 // selection when they are local and of comparable power, else defensive
-// selection; tree + power for many; plus bsdf for many lights with a world or
-// an emissive mesh, for a huge light, and for a minor world among few lights
-// (left to bsdf; the light technique then selects among the others).
+// selection; the tree alone for many; plus bsdf for a world among many lights,
+// for a huge light (an emissive mesh as large as the scene counts as one), and
+// for a minor world among few lights (left to bsdf; the light technique then
+// selects among the others).
 // Beyond these counts the plan stops looping over lights per point: delta
 // lights are drawn from a light tree, and the default light technique selects
 // by the tree instead of by exact unoccluded irradiance. Integrated lights:
