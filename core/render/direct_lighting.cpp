@@ -984,17 +984,19 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
-        const double pdf = ok && own_light_only ? light->pmf * s->pdf : 0.0;
-        if (ok && own_light_only && !(pdf > 0 && std::isfinite(pdf))) ok = false;
         if (ok && own_light_only) {
-            const Integrand f = light_integrand(light->light, p.x, p.n, p.ng, w);
-            const double main_f[3] = {f.main.x, f.main.y, f.main.z};
-            const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
-            for (int e = 0; e < n_into; ++e) {
-                into[e].main->add_sample(0, &pdf, main_f);
-                if (hidden_index >= 0) into[e].hidden->add_sample(0, &pdf, hidden_f);
+            const double pdf = light->pmf * s->pdf;
+            ok = pdf > 0 && std::isfinite(pdf);
+            if (ok) {
+                const Integrand f = light_integrand(light->light, p.x, p.n, p.ng, w);
+                const double main_f[3] = {f.main.x, f.main.y, f.main.z};
+                const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
+                for (int e = 0; e < n_into; ++e) {
+                    into[e].main->add_sample(0, &pdf, main_f);
+                    if (hidden_index >= 0) into[e].hidden->add_sample(0, &pdf, hidden_f);
+                }
+                return;
             }
-            return;
         }
     }
     // Every technique's density at the sample's own position: the position
