@@ -774,14 +774,13 @@ bool Baker::plan_pass(Pass& pass) {
 // one (dyadic_schedule.h).
 bool Baker::plan_dyadic_pass(Pass& pass) {
     const double fit = timer_.fit(settings_.time_budget - elapsed()) / budget_.per_round;
-    DyadicPass next = next_dyadic_pass(done_rounds_, fit, later_min_rounds_,
-                                       budget_.full_rounds - done_rounds_);
     // An optimal strategy's probe is replaced by a first net of
     // rounds_per_pass only where that still fits. Where it does not (small
     // budgets, costly first passes: the race's 0.25 s on 64 lights ended at
     // 0.11 s with the probe alone), the probe stays as the first round and the
     // passes after it follow as for balance (below 2(k + 1) samples a pass
     // solves as balance anyway).
+    DyadicPass next;
     if (replace_probe_) {
         const PassAfterProbe after =
             pass_after_probe(last_pass_rounds_, fit, later_min_rounds_, budget_.full_rounds);
@@ -791,6 +790,9 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
             done_rounds_ = last_pass_rounds_;
             if (power_of_two_floor(done_rounds_) == done_rounds_) record_net_end();
         }
+    } else {
+        next = next_dyadic_pass(done_rounds_, fit, later_min_rounds_,
+                                budget_.full_rounds - done_rounds_);
     }
     if (next.rounds < 1) {
         status_ = BakeStatus::TimeBudget;
