@@ -796,7 +796,17 @@ void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footpri
     // unbiased; a light that applies nowhere it was probed is left to the
     // other techniques there.
     const int n_probes = probes.count();
-    set_anchor(footprint);
+    // Anchored weights serve only per-point tables by unoccluded irradiance;
+    // an anchor costs a slot per integrated light (16k on an emissive mesh).
+    bool irradiance_tables = false;
+    for (int k : p_.techniques) {
+        const Technique& t = p_.settings.techniques[k];
+        irradiance_tables = irradiance_tables ||
+                            (!t.bsdf && !p_.selector(t.selection) &&
+                             (t.selection == LightSelection::Unoccluded ||
+                              t.selection == LightSelection::Defensive));
+    }
+    set_anchor(irradiance_tables ? footprint : nullptr);
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
         if (!t.bsdf) {
