@@ -940,7 +940,7 @@ Vec3 PointLighting::Impl::delta_lighting(const SurfacePoint& p, double u) {
     for (int j = 0; j < draws; ++j) {
         const double uj = u + double(j) / draws;
         const auto pick =
-            p_.delta_selector.sample(p.x, p.n, uj - std::floor(uj), &delta_memo_);
+            p_.delta_selector->sample(p.x, p.n, uj - std::floor(uj), &delta_memo_);
         if (pick) total += contribution(pick->light) / pick->pmf;
     }
     return total / double(draws);
@@ -1517,22 +1517,27 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
     for (int k : techniques) {
         const Technique& t = settings.techniques[k];
         if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
-        if (t.selection == LightSelection::Uniform && uniform_selector.empty())
-            uniform_selector = scene.light_selector(LightSelector::Kind::Uniform, false);
-        if (t.selection == LightSelection::Power && power_selector.empty())
-            power_selector = scene.light_selector(LightSelector::Kind::Power, false);
-        if (t.selection == LightSelection::Tree && tree_selector.empty())
-            tree_selector = scene.light_selector(LightSelector::Kind::Tree, false);
+        if (t.selection == LightSelection::Uniform && !uniform_selector)
+            uniform_selector = &scene.light_selector(LightSelector::Kind::Uniform, false);
+        if (t.selection == LightSelection::Power && !power_selector)
+            power_selector = &scene.light_selector(LightSelector::Kind::Power, false);
+        if (t.selection == LightSelection::Tree && !tree_selector)
+            tree_selector = &scene.light_selector(LightSelector::Kind::Tree, false);
     }
     if (plan.sample_delta_lights)
-        delta_selector = scene.light_selector(LightSelector::Kind::Tree, true);
+        delta_selector = &scene.light_selector(LightSelector::Kind::Tree, true);
 }
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {
     switch (selection) {
-        case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
-        case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
-        case LightSelection::Tree: return &tree_selector;
+        case LightSelection::Uniform:
+            return uniform_selector && !uniform_selector->empty() ? uniform_selector : nullptr;
+        case LightSelection::Power:
+            return power_selector && !power_selector->empty() ? power_selector : nullptr;
+        case LightSelection::Tree: {
+            static const LightSelector kNoLights;  // a tree technique never built: draws nothing
+            return tree_selector ? tree_selector : &kNoLights;
+        }
         case LightSelection::Unoccluded:
         case LightSelection::Defensive: return nullptr;
     }
