@@ -40,6 +40,7 @@ class Part:
     mesh_id: int
     triangles: int
     tri_loops: np.ndarray = None   # (T, 3) loop indices of the evaluated mesh (color attributes)
+    uv_area: float = 0.0           # its triangles' area in UV space (the image is 1)
 
 
 @dataclass
@@ -395,6 +396,13 @@ def _modifier_differences(ob):
 # The exporter
 
 
+def _uv_area(corner_uvs):
+    """Total area of triangles given by their corners' UVs (3T, 2)."""
+    uv = np.asarray(corner_uvs, np.float64).reshape(-1, 3, 2)
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    return float(0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum())
+
+
 def _corner_normals(positions, tris, loop_normals, flat):
     """Per-corner shading normals (3T, 3) float32. Cycles shades a flat-shaded
     polygon with each triangle's own geometric normal (its Ng), not the
@@ -598,8 +606,10 @@ class _Exporter:
                                               local.flat[select]) if shaded else None)
             uvs = None
             baked = bake_name is not None and (image is not None or attr is not None)
+            uv_area = 0.0
             if baked and image is not None:
                 uvs = np.ascontiguousarray(local.uv[loops.ravel()], dtype=np.float32)
+                uv_area = _uv_area(uvs)
             mesh_id = self.scene.add_mesh(np.ascontiguousarray(verts), tris, corner_normals,
                                           uvs, emission)
             if receiver is not None:
@@ -612,7 +622,7 @@ class _Exporter:
             if emission is not None:
                 self.counts["emissive_meshes"] += 1
             if baked:
-                part = Part(ob_eval.name, mesh_id, count, tri_loops=loops)
+                part = Part(ob_eval.name, mesh_id, count, tri_loops=loops, uv_area=uv_area)
                 (image.parts if image is not None else attr.parts).append(part)
 
     # -- lights --
