@@ -17,7 +17,9 @@
 // (only the scenes of N emitters: for profiling one scene), --reps N
 // (repetitions, 5 unless given: more for a profile), --texels (each receiver
 // spreads its samples over its grid cell, as a bake's texel does: every
-// sample at its own position), --rounds N (4 unless given).
+// sample at its own position), --rounds N (4 unless given), --general (each
+// scene also without DirectLightingSettings::fast_paths, in the same run: a
+// family of its own, "… general").
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -126,13 +128,14 @@ struct Timed {
     double cell = 0;
 
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
-          int grid, bool texels_, int rounds)
-        : family(std::move(family_)), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
+          int grid, bool texels_, int rounds, bool fast_paths)
+        : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
         add_floor(scene);
         build(scene);
         scene.commit();
         default_techniques(scene, settings.techniques, settings.samples);
         settings.rounds = rounds;
+        settings.fast_paths = fast_paths;
         for (int j = 0; j < grid; ++j)
             for (int i = 0; i < grid; ++i)
                 points.emplace_back(-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0);
@@ -179,7 +182,7 @@ int main(int argc, char** argv) {
     std::string only;  // --only FAMILY: time one family (for profiling)
     int only_emitters = 0;  // --emitters N: only scenes of N emitters
     int reps = 5, rounds = 4;
-    bool texels = false;
+    bool texels = false, general = false;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
@@ -190,8 +193,9 @@ int main(int argc, char** argv) {
         else if (std::strcmp(argv[i], "--rounds") == 0 && i + 1 < argc)
             rounds = std::max(1, std::atoi(argv[++i]));
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
+        else if (std::strcmp(argv[i], "--general") == 0) general = true;
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N] [--texels] [--rounds N]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
                          argv[0]);
             return 2;
         }
@@ -203,20 +207,23 @@ int main(int argc, char** argv) {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
     std::vector<std::unique_ptr<Timed>> scenes;
-    const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
-    for (auto [stacks, slices] : spheres)
-        if (wanted("sphere", 2 * slices * (stacks - 1)))
-            scenes.push_back(std::make_unique<Timed>(
-                "emissive sphere", 2 * slices * (stacks - 1),
-                [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds));
-    for (int side : {1, 4, 16, 100})
-        if (wanted("point", side * side))
-            scenes.push_back(std::make_unique<Timed>(
-                "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds));
-    for (int side : {1, 4, 16, 100})
-        if (wanted("area", side * side))
-            scenes.push_back(std::make_unique<Timed>(
-                "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds));
+    for (bool fast : {true, false}) {
+        if (!fast && !general) break;
+        const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
+        for (auto [stacks, slices] : spheres)
+            if (wanted("sphere", 2 * slices * (stacks - 1)))
+                scenes.push_back(std::make_unique<Timed>(
+                    "emissive sphere", 2 * slices * (stacks - 1),
+                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast));
+        for (int side : {1, 4, 16, 100})
+            if (wanted("point", side * side))
+                scenes.push_back(std::make_unique<Timed>(
+                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast));
+        for (int side : {1, 4, 16, 100})
+            if (wanted("area", side * side))
+                scenes.push_back(std::make_unique<Timed>(
+                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast));
+    }
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every
     // scene alike rather than all of one scene.
