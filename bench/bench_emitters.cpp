@@ -1,6 +1,7 @@
 // Emitter-scaling benchmark (issue 8): time per texel-sample as the number of
-// emitters grows — an emissive UV sphere from 16 to ~100k triangles, grids of
-// 1 to 10k point lights and of 1 to 10k small area lights — each over a floor
+// emitters grows — an emissive UV sphere from 16 to ~100k triangles (also over
+// a plate that shadows half the floor: "shadowed sphere"), grids of 1 to 10k
+// point lights and of 1 to 10k small area lights — each over a floor
 // of 32×32 receivers, with the effect plan's default techniques (which switch
 // to the light tree past 16 integrated emitters and to drawn delta lights
 // past 64).
@@ -13,7 +14,7 @@
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
-// Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
+// Flags: --quick (fewer receivers), --only sphere|shadowed|point|area, --emitters N
 // (only the scenes of N emitters: for profiling one scene), --reps N
 // (repetitions, 5 unless given: more for a profile), --texels (each receiver
 // spreads its samples over its grid cell, as a bake's texel does: every
@@ -195,7 +196,7 @@ int main(int argc, char** argv) {
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
         else if (std::strcmp(argv[i], "--general") == 0) general = true;
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
                          argv[0]);
             return 2;
         }
@@ -215,6 +216,19 @@ int main(int argc, char** argv) {
                 scenes.push_back(std::make_unique<Timed>(
                     "emissive sphere", 2 * slices * (stacks - 1),
                     [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast));
+        // The sphere over an opaque plate that shadows half of the floor:
+        // many light samples there see nothing (their integrand is 0).
+        for (auto [stacks, slices] : spheres)
+            if (wanted("shadowed", 2 * slices * (stacks - 1)))
+                scenes.push_back(std::make_unique<Timed>(
+                    "shadowed sphere", 2 * slices * (stacks - 1),
+                    [&](Scene& s) {
+                        add_emissive_sphere(s, stacks, slices);
+                        s.add_mesh(std::vector<Vec3>{{0, -3, 0.8}, {3, -3, 0.8}, {3, 3, 0.8},
+                                                     {0, 3, 0.8}},
+                                   {{0, 1, 2}, {0, 2, 3}});
+                    },
+                    grid, texels, rounds, fast));
         for (int side : {1, 4, 16, 100})
             if (wanted("point", side * side))
                 scenes.push_back(std::make_unique<Timed>(

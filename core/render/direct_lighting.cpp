@@ -744,10 +744,12 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
             return false;
         return !(blocker->t >= (distance - offset) * (triangle ? 1 - kEmitterDepthTolerance : 1.0));
     };
-    // The drawn light seen (the usual case): the integrand is not 0, and its
-    // densities need every light along w anyway — list them all at once.
+    // The drawn light seen, or hidden by an emitting surface (a closed
+    // mesh's near side): the integrand is not 0, and its densities need
+    // every light along w anyway — list them all at once.
     const std::vector<std::uint32_t>* along = &clipped_;
-    if (!hidden(p_.scene.lights()[drawn], drawn_distance)) {
+    if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
+        p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
         along = &lights_along(x, w);
     } else {
         // Hidden: no light past the blocker is seen, at most
