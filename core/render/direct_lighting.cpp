@@ -1120,8 +1120,8 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     }
 }
 
-// A sample whose integrand is 0 (its light hidden: a closed mesh's far side,
-// drawn as often as its near side) adds 0 to every sum of the estimators,
+// A sample whose integrand is 0 (its light hidden by a surface that does not
+// emit, so that nothing along it is seen) adds 0 to every sum of the estimators,
 // whatever the densities, except the optimal strategies' moments among
 // several techniques (and the pilot's records). There it goes in with its
 // own technique's density bounded below by its light's share (> 0) and the
