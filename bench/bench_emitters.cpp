@@ -1,6 +1,7 @@
 // Emitter-scaling benchmark (issue 8): time per texel-sample as the number of
-// emitters grows — an emissive UV sphere from 16 to ~100k triangles, grids of
-// 1 to 10k point lights and of 1 to 10k small area lights — each over a floor
+// emitters grows — an emissive UV sphere from 16 to ~100k triangles (also over
+// a plate that shadows half the floor: "shadowed sphere"), grids of 1 to 10k
+// point lights and of 1 to 10k small area lights — each over a floor
 // of 32×32 receivers, with the effect plan's default techniques (which switch
 // to the light tree past 16 integrated emitters and to drawn delta lights
 // past 64).
@@ -13,11 +14,13 @@
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
-// Flags: --quick (fewer receivers), --only sphere|point|area, --emitters N
+// Flags: --quick (fewer receivers), --only sphere|shadowed|point|area, --emitters N
 // (only the scenes of N emitters: for profiling one scene), --reps N
 // (repetitions, 5 unless given: more for a profile), --texels (each receiver
 // spreads its samples over its grid cell, as a bake's texel does: every
-// sample at its own position), --rounds N (4 unless given).
+// sample at its own position), --rounds N (4 unless given), --general (each
+// scene also without DirectLightingSettings::fast_paths, in the same run: a
+// family of its own, "… general").
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -126,13 +129,14 @@ struct Timed {
     double cell = 0;
 
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
-          int grid, bool texels_, int rounds)
-        : family(std::move(family_)), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
+          int grid, bool texels_, int rounds, bool fast_paths)
+        : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
         add_floor(scene);
         build(scene);
         scene.commit();
         default_techniques(scene, settings.techniques, settings.samples);
         settings.rounds = rounds;
+        settings.fast_paths = fast_paths;
         for (int j = 0; j < grid; ++j)
             for (int i = 0; i < grid; ++i)
                 points.emplace_back(-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0);
@@ -179,7 +183,7 @@ int main(int argc, char** argv) {
     std::string only;  // --only FAMILY: time one family (for profiling)
     int only_emitters = 0;  // --emitters N: only scenes of N emitters
     int reps = 5, rounds = 4;
-    bool texels = false;
+    bool texels = false, general = false;
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
@@ -190,8 +194,9 @@ int main(int argc, char** argv) {
         else if (std::strcmp(argv[i], "--rounds") == 0 && i + 1 < argc)
             rounds = std::max(1, std::atoi(argv[++i]));
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
+        else if (std::strcmp(argv[i], "--general") == 0) general = true;
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|point|area] [--emitters N] [--reps N] [--texels] [--rounds N]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
                          argv[0]);
             return 2;
         }
@@ -203,20 +208,36 @@ int main(int argc, char** argv) {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
     std::vector<std::unique_ptr<Timed>> scenes;
-    const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
-    for (auto [stacks, slices] : spheres)
-        if (wanted("sphere", 2 * slices * (stacks - 1)))
-            scenes.push_back(std::make_unique<Timed>(
-                "emissive sphere", 2 * slices * (stacks - 1),
-                [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds));
-    for (int side : {1, 4, 16, 100})
-        if (wanted("point", side * side))
-            scenes.push_back(std::make_unique<Timed>(
-                "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds));
-    for (int side : {1, 4, 16, 100})
-        if (wanted("area", side * side))
-            scenes.push_back(std::make_unique<Timed>(
-                "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds));
+    for (bool fast : {true, false}) {
+        if (!fast && !general) break;
+        const std::pair<int, int> spheres[] = {{2, 8}, {8, 16}, {20, 40}, {64, 128}, {158, 316}};
+        for (auto [stacks, slices] : spheres)
+            if (wanted("sphere", 2 * slices * (stacks - 1)))
+                scenes.push_back(std::make_unique<Timed>(
+                    "emissive sphere", 2 * slices * (stacks - 1),
+                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast));
+        // The sphere over an opaque plate that shadows half of the floor:
+        // many light samples there see nothing (their integrand is 0).
+        for (auto [stacks, slices] : spheres)
+            if (wanted("shadowed", 2 * slices * (stacks - 1)))
+                scenes.push_back(std::make_unique<Timed>(
+                    "shadowed sphere", 2 * slices * (stacks - 1),
+                    [&](Scene& s) {
+                        add_emissive_sphere(s, stacks, slices);
+                        s.add_mesh(std::vector<Vec3>{{0, -3, 0.8}, {3, -3, 0.8}, {3, 3, 0.8},
+                                                     {0, 3, 0.8}},
+                                   {{0, 1, 2}, {0, 2, 3}});
+                    },
+                    grid, texels, rounds, fast));
+        for (int side : {1, 4, 16, 100})
+            if (wanted("point", side * side))
+                scenes.push_back(std::make_unique<Timed>(
+                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast));
+        for (int side : {1, 4, 16, 100})
+            if (wanted("area", side * side))
+                scenes.push_back(std::make_unique<Timed>(
+                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast));
+    }
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every
     // scene alike rather than all of one scene.

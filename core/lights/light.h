@@ -23,18 +23,24 @@ const char* light_type_name(LightType type);
 enum class ShapeSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
 const char* shape_sampler_name(ShapeSampler sampler);
 
-struct Light {
+// The fields every integrated light reads per sample come first, then the
+// triangle's: an emissive triangle (the many-light case) is read from the
+// first two cache lines of its record instead of five of six (among 100k
+// lights each is a miss).
+struct alignas(64) Light {
     LightType type = LightType::Rect;
+    bool two_sided = false;  // Rect/Ellipse/Triangle; emissive meshes are two-sided
+    bool cast_shadow = true;      // Blender: cycles.cast_shadow
+    bool visible_to_bsdf = true;  // Blender: cycles.use_multiple_importance_sampling
+    std::uint32_t mesh = ~0u, mesh_triangle = ~0u;  // Triangle: where it is in the geometry
     // Rect/Ellipse/Triangle/World: radiance, W/(m² sr). Point/Spot: intensity,
     // W/sr. Sun: irradiance on a surface facing it, W/m². RGB.
     Vec3 emission;
+    double spread = kPi;     // Rect/Ellipse: Blender's spread angle
+    TriangleLight triangle;  // Triangle (emissive mesh triangle)
 
     RectLight rect;          // Rect
     EllipseLight ellipse;    // Ellipse (disk when the semi-axes are equal)
-    TriangleLight triangle;  // Triangle (emissive mesh triangle)
-    std::uint32_t mesh = ~0u, mesh_triangle = ~0u;  // Triangle: where it is in the geometry
-    bool two_sided = false;  // Rect/Ellipse/Triangle; emissive meshes are two-sided
-    double spread = kPi;     // Rect/Ellipse: Blender's spread angle
 
     Vec3 position;           // Point/Spot
     double radius = 0;       // Point/Spot: > 0 makes a disk facing the receiver
@@ -43,9 +49,6 @@ struct Light {
 
     Vec3 to_sun;             // Sun: unit direction toward the sun
     double sun_half_angle = 0;
-
-    bool cast_shadow = true;      // Blender: cycles.cast_shadow
-    bool visible_to_bsdf = true;  // Blender: cycles.use_multiple_importance_sampling
 
     // Lights integrated by one deterministic shadow ray, outside MIS.
     bool is_delta() const;

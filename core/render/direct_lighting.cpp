@@ -178,6 +178,18 @@ struct PointLighting::Impl {
         Vec3 main, hidden;  // lights BSDF rays see, and those they do not
     };
     Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
+    // take_sample's shortcut for a light sample of integrand 0 (see there);
+    // false: the sample still needs its densities.
+    bool add_unlit_sample(const Active& active, std::size_t a, int hidden_index,
+                          double own_density, const Integrand& f, const Estimators* into,
+                          int n_into);
+    // integrand() of a direction a light technique drew (a light lies along
+    // it), where every light casts shadows and none lacks a shape
+    // (clip_at_blocker_, below p_): the closest hit first; where it hides
+    // the drawn light (at drawn_distance from x), only the lights up to it,
+    // which are all that can be seen. The same value as integrand().
+    Integrand integrand_to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
+                                   std::uint32_t drawn, double drawn_distance);
     // Light l's own part of the integrand along w (visible from x or not).
     Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
                               const Vec3& w);
@@ -317,6 +329,16 @@ struct PointLighting::Impl {
     const bool own_light_estimates_ = std::none_of(
         p_.scene.lights().begin(), p_.scene.lights().end(),
         [](const Light& l) { return l.type == LightType::Triangle; });
+    // integrand_to_blocker applies (set after p_). Among emissive triangles:
+    // with analytic lights alone, integrand() often needs only an occlusion
+    // ray, cheaper than a closest hit.
+    const bool clip_at_blocker_ =
+        p_.settings.fast_paths && p_.plan.shadow_rays && p_.scene.unshaped_lights().empty() &&
+        std::all_of(p_.scene.lights().begin(), p_.scene.lights().end(),
+                    [](const Light& l) { return l.cast_shadow; }) &&
+        std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
+                    [](const Light& l) { return l.type == LightType::Triangle; });
+    std::vector<std::uint32_t> clipped_;  // integrand_to_blocker's lights
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -702,6 +724,59 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     return f;
 }
 
+PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
+    const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w, std::uint32_t drawn,
+    double drawn_distance) {
+    Integrand f;
+    const double cos_theta = dot(n, w);
+    if (!(cos_theta > 0)) return f;
+    const Vec3 origin = offset_ray_origin(x, ng, w);
+    const double offset = length(origin - x);
+    ++counters.rays;
+    const std::optional<RayHit> blocker = p_.scene.geometry().closest_hit(
+        origin, w, 0, std::numeric_limits<double>::infinity());
+    // integrand()'s rule: whether the blocker hides a light at `distance`
+    // from x (a triangle is not hidden by itself, nor by a coplanar
+    // neighbour at its depth).
+    auto hidden = [&](const Light& light, double distance) {
+        if (!blocker) return false;
+        const bool triangle = light.type == LightType::Triangle;
+        if (triangle && blocker->mesh == light.mesh && blocker->triangle == light.mesh_triangle)
+            return false;
+        return !(blocker->t >= (distance - offset) * (triangle ? 1 - kEmitterDepthTolerance : 1.0));
+    };
+    // The drawn light seen, or hidden by an emitting surface (a closed
+    // mesh's near side): the integrand is not 0, and its densities need
+    // every light along w anyway — list them all at once.
+    const std::vector<std::uint32_t>* along = &clipped_;
+    if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
+        p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
+        along = &lights_along(x, w);
+    } else {
+        // Hidden: no light past the blocker is seen, at most
+        // blocker->t / (1 − tolerance) + offset from x. The emitter shapes'
+        // distances are single precision: a margin far above their rounding
+        // (relative to the coordinates' size) keeps every such light listed.
+        const double reach = blocker->t / (1 - kEmitterDepthTolerance) + offset;
+        const double scale = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), reach});
+        clipped_.clear();
+        p_.scene.emitter_shapes().lights_along(x, w, clipped_, reach * (1 + 1e-4) + 1e-5 * scale);
+        // As lights_along(): the drawn light surely lies along w.
+        if (std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
+            clipped_.push_back(drawn);
+    }
+    for (std::uint32_t l : *along) {
+        const Light& light = p_.scene.lights()[l];
+        const auto e = emitted_radiance(light, x, w);
+        if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;
+        (light.visible_to_bsdf ? f.main : f.hidden) += e->radiance;
+    }
+    const double closure = receiver_cosine_factor(p_.settings.receiver, cos_theta);
+    f.main *= closure;
+    f.hidden *= closure;
+    return f;
+}
+
 PointLighting::Impl::Integrand PointLighting::Impl::light_integrand(std::uint32_t l,
                                                                     const Vec3& x,
                                                                     const Vec3& n,
@@ -988,6 +1063,9 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     // lights along ω (their densities and radiance: an all-hits query, a tree
     // walk each) nor a closest hit, only an occlusion ray up to the light.
     std::optional<SelectedLight> light;
+    // A light sample's: its light's share of the technique's density, and
+    // the distance to the point drawn on it.
+    double own_density = 0, drawn_distance = 0;
     const bool own_light_only =
         own_light_estimates_ && active.all.size() == 1 && !t.bsdf && !pilot_;
     if (t.bsdf) {
@@ -1005,6 +1083,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
+        if (ok) own_density = light->pmf * s->pdf, drawn_distance = s->dist;
         if (ok && own_light_only) {
             const double pdf = light->pmf * s->pdf;
             ok = pdf > 0 && std::isfinite(pdf);
@@ -1024,6 +1103,12 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     // density is the same for all of them, so the MIS weights are those of
     // p_k(ω | x).
     double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques];
+    std::optional<Integrand> light_f;
+    if (ok && light && clip_at_blocker_) {
+        light_f = integrand_to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
+        if (add_unlit_sample(active, a, hidden_index, own_density, *light_f, into, n_into))
+            return;
+    }
     if (ok) {
         for (std::size_t b = 0; b < active.all.size(); ++b) {
             pdfs[b] = technique_pdf(active.all[b], p.x, p.n, w);
@@ -1042,7 +1127,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         return;
     }
     const std::uint64_t rays_before = counters.rays;
-    const Integrand f = integrand(p.x, p.n, p.ng, w);
+    const Integrand f = light_f ? *light_f : integrand(p.x, p.n, p.ng, w);
     if (pilot_) record_sample(active, a, pdfs, f.main + f.hidden, rays_before);
     const double main_f[3] = {f.main.x, f.main.y, f.main.z};
     const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
@@ -1054,6 +1139,33 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         into[e].main->add_sample(int(a), pdfs, main_f);
         if (hidden_index >= 0) into[e].hidden->add_sample(hidden_index, hidden_pdfs, hidden_f);
     }
+}
+
+// A sample whose integrand is 0 (its light hidden by a surface that does not
+// emit, so that nothing along it is seen) adds 0 to every sum of the estimators,
+// whatever the densities, except the optimal strategies' moments among
+// several techniques (and the pilot's records). There it goes in with its
+// own technique's density bounded below by its light's share (> 0) and the
+// others' left at 0 — no emitter query, no tree walks.
+bool PointLighting::Impl::add_unlit_sample(const Active& active, std::size_t a,
+                                           int hidden_index, double own_density,
+                                           const Integrand& f, const Estimators* into,
+                                           int n_into) {
+    const bool zero = f.main.x == 0 && f.main.y == 0 && f.main.z == 0 && f.hidden.x == 0 &&
+                      f.hidden.y == 0 && f.hidden.z == 0;
+    const bool densities_unused =
+        !pilot_ && (active.all.size() == 1 || !is_optimal(p_.settings.strategy));
+    if (!zero || !densities_unused || !(own_density > 0) || !std::isfinite(own_density))
+        return false;
+    double pdfs[kMaxMisTechniques] = {}, hidden_pdfs[kMaxMisTechniques] = {};
+    pdfs[a] = own_density;
+    if (hidden_index >= 0) hidden_pdfs[hidden_index] = own_density;
+    const double none[3] = {0, 0, 0};
+    for (int e = 0; e < n_into; ++e) {
+        into[e].main->add_sample(int(a), pdfs, none);
+        if (hidden_index >= 0) into[e].hidden->add_sample(hidden_index, hidden_pdfs, none);
+    }
+    return true;
 }
 
 // One sample for the allocation pilot, over the settings' techniques (those

@@ -38,6 +38,11 @@ struct DirectLightingSettings {
     // what a noise target stops on — at the cost of the stratification
     // across streams (2–3× the error per sample with 4 on the Cycles race).
     int streams = 1;
+    // Shortcuts that give the same estimates with less work (a light
+    // sample's emitter query stopped at its closest hit; no densities for a
+    // sample of integrand 0 where the estimator does not use them). false:
+    // the general path, which tests compare them with.
+    bool fast_paths = true;
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
     Receiver receiver;

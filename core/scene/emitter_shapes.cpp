@@ -80,14 +80,16 @@ void EmitterShapes::commit() {
 }
 
 void EmitterShapes::lights_along(const Vec3& origin, const Vec3& direction,
-                                 std::vector<std::uint32_t>& out) const {
+                                 std::vector<std::uint32_t>& out, double tmax) const {
     if (!committed_) throw std::logic_error("emitter shapes: lights_along before commit");
     if (!scene_) return;
     RTCRay ray;
     ray.org_x = float(origin.x); ray.org_y = float(origin.y); ray.org_z = float(origin.z);
     ray.dir_x = float(direction.x); ray.dir_y = float(direction.y); ray.dir_z = float(direction.z);
     ray.tnear = 0.0f;
-    ray.tfar = std::numeric_limits<float>::infinity();
+    ray.tfar = tmax < double(std::numeric_limits<float>::max())
+                   ? std::nextafter(float(tmax), std::numeric_limits<float>::infinity())
+                   : std::numeric_limits<float>::infinity();
     ray.time = 0.0f;
     ray.mask = 0xFFFFFFFFu;
     ray.id = 0;

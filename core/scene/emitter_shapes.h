@@ -9,6 +9,7 @@
 #include <embree3/rtcore.h>
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -31,10 +32,12 @@ public:
     bool empty() const { return light_of_.empty(); }
 
     // Appends to `out`, without repeats and in no order, every light whose
-    // (enlarged) shape the ray origin + t·direction, t ≥ 0, crosses — from
-    // either side, at any depth. Thread-safe after commit().
+    // (enlarged) shape the ray origin + t·direction, t ∈ [0, tmax], crosses —
+    // from either side. Thread-safe after commit(). A finite tmax is no
+    // exact bound: a light crossed just past it may be listed as well.
     void lights_along(const Vec3& origin, const Vec3& direction,
-                      std::vector<std::uint32_t>& out) const;
+                      std::vector<std::uint32_t>& out,
+                      double tmax = std::numeric_limits<double>::infinity()) const;
 
 private:
     std::shared_ptr<Device> device_;
