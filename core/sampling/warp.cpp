@@ -170,6 +170,14 @@ constexpr int kMaxPatches = 4;
 
 Point2 sample_piecewise_bilinear(double u1, double u2, const double* w, int g) {
     g = std::clamp(g, 1, kMaxPatches);
+    if (g == 1) {
+        // One patch (the cosine warp's): the general path's arithmetic
+        // without its loops, bit for bit (its segment masses are exactly 1).
+        const double y = std::min(sample_linear(u2, 0.5 * w[0] + 0.5 * w[1],
+                                                0.5 * w[2] + 0.5 * w[3]), 1.0 - 1e-16);
+        const double a = (1 - y) * w[0] + y * w[2], b = (1 - y) * w[1] + y * w[3];
+        return {std::min(sample_linear(u1, a, b), 1.0 - 1e-16), y};
+    }
     const int n = g + 1;
     // Marginal in y at the nodes: the trapezoid rule in x is exact for the
     // piecewise-linear rows.
