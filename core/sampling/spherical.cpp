@@ -70,6 +70,12 @@ double SphericalRect::width_at(double delta, double c) const {
 }
 
 double SphericalRect::sub_solid_angle(double w) const {
+    double x, y;
+    half_angle_vector(w, x, y);
+    return 2.0 * std::atan2(y, x);
+}
+
+void SphericalRect::half_angle_vector(double w, double& x, double& y) const {
     // a and d (the edge at x0) are the same at every w: their lengths and a·d
     // are kept (make), as Newton evaluates this a few times per sample.
     const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
@@ -82,8 +88,8 @@ double SphericalRect::sub_solid_angle(double w) const {
     // no subtraction of angles (one atan2 instead of two per Newton step).
     // A sum near π (Ω near 2π) may round den1 + den2 below 0: clamped, it
     // gives π.
-    const double y = std::max(0.0, num * (den1 + den2));
-    return 2.0 * std::atan2(y, den1 * den2 - num * num);
+    y = std::max(0.0, num * (den1 + den2));
+    x = den1 * den2 - num * num;
 }
 
 double SphericalRect::h_at(double cos_phi, double y) const {
@@ -91,11 +97,19 @@ double SphericalRect::h_at(double cos_phi, double y) const {
 }
 
 DirSample SphericalRect::sample(double u1, double u2) const {
+    // Newton on g = Ω(δ) − target, with g taken as 2 sin(g/2) from the
+    // half-angle vector (x, y) of Ω(δ) and the target's (cos, sin): the same
+    // sign and root and the same value to second order, without an atan2 per
+    // step (|g/2| < π always: Ω and the target lie in [0, 2π)).
     const double target = u1 * omega_;
+    const double ct = std::cos(0.5 * target), st = std::sin(0.5 * target);
     double lo = 0, hi = dphi_, delta = u1 * dphi_;
     for (int it = 0; it < 100; ++it) {
         const double c = std::cos(phi0_ + delta);
-        const double g = sub_solid_angle(width_at(delta, c)) - target;
+        double x, y;
+        half_angle_vector(width_at(delta, c), x, y);
+        const double r = std::sqrt(x * x + y * y);
+        const double g = r > 0 ? 2.0 * (y * ct - x * st) / r : -target;
         if (g == 0) break;
         (g < 0 ? lo : hi) = delta;
         const double dg = h_at(c, y1_) - h_at(c, y0_);  // dΩ/dφ, exact

@@ -48,6 +48,8 @@ public:
 
 private:
     double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
+    // Ω/2 of [x0, x0+w] × [y0, y1] as the angle of (cos, sin) ∝ (x, y), y ≥ 0.
+    void half_angle_vector(double w, double& x, double& y) const;
     double width_at(double delta, double cos_phi) const;  // x(φ0+δ) − x0; cos_phi = cos(φ0+δ)
     double h_at(double cos_phi, double y) const;
     Vec3 ex_, ey_, ez_;  // ez points from the plane toward x
