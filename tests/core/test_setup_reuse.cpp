@@ -1,0 +1,87 @@
+// The per-point set-up's scratch kept from point to point (issue 9 item 5:
+// a small bake's fixed cost): a PointLighting that has shaded other points
+// must shade a point exactly as a new one does — no technique, table or
+// count of an earlier point may leak into the next. The points alternate
+// between texels where every light technique takes part and texels where
+// none does (no light reaches them), so a stale technique list or mask shows.
+#include <catch2/catch.hpp>
+
+#include <cstring>
+#include <vector>
+
+#include "render/direct_lighting.h"
+
+using namespace omis;
+
+namespace {
+
+// A square of the floor z = 0 around `centre`, as a texel's footprint.
+class SquareFootprint : public Footprint {
+public:
+    SquareFootprint(const Vec3& centre, double half) : centre_(centre), half_(half) {}
+    SurfacePoint at(double u, double v) const override {
+        const Vec3 x = centre_ + Vec3((2 * u - 1) * half_, (2 * v - 1) * half_, 0);
+        return SurfacePoint{x, Vec3(0, 0, 1), Vec3(0, 0, 1)};
+    }
+    SurfacePoint centre() const { return at(0.5, 0.5); }
+
+private:
+    Vec3 centre_;
+    double half_;
+};
+
+// The race's `area` scene's kind: a plain rect and a spread rect (whose reach
+// ends inside the floor), plus a narrow spread rect that reaches one corner.
+void add_scene(Scene& scene) {
+    scene.add_mesh({{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}}, {{0, 1, 2}, {0, 2, 3}});
+    scene.add_light(make_rect_light(Vec3(-0.75, -0.45, 0.85), Vec3(0, 0.5, 0),
+                                    Vec3(0.47, 0, -0.17), Vec3(20, 20, 20), false, kPi));
+    scene.add_light(make_rect_light(Vec3(0.1, 0.15, 0.6), Vec3(-0.15, 0.26, 0.0),
+                                    Vec3(0.78, 0.45, 0.0), Vec3(40, 40, 40), false, 0.5 * kPi));
+    scene.add_light(make_rect_light(Vec3(1.2, 1.2, 0.3), Vec3(0, 0.2, 0), Vec3(0.2, 0, 0),
+                                    Vec3(9, 9, 9), false, 0.4));
+    scene.commit();
+}
+
+bool same_bits(const double* a, const double* b) {
+    return std::memcmp(a, b, 3 * sizeof(double)) == 0;
+}
+
+}  // namespace
+
+TEST_CASE("set-up reuse: a point shades the same after other points as on its own",
+          "[texel_tables]") {
+    Scene scene;
+    add_scene(scene);
+    // Lit texels, one at the spread light's rim, one only its corner reaches,
+    // and unlit ones (under the one-sided lights' backs: beyond every reach)
+    // between them.
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, 0, 0), 0.02},     {Vec3(-2.9, 2.9, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05},
+        {Vec3(2.9, -2.9, 0), 0.1}, {Vec3(1.3, 1.3, 0), 0.08},  {Vec3(-2.9, -2.9, 0), 0.02},
+        {Vec3(-0.4, -0.3, 0), 0.02},
+    };
+    for (const char* light_technique : {"uniform/solid-angle", "unoccluded/area"}) {
+        DirectLightingSettings s;
+        for (const char* name : {light_technique, "bsdf"})
+            s.techniques.push_back(*parse_technique(name));
+        s.samples = {1, 1};
+        s.strategy = Strategy::OptimalDirect;
+        s.seed = 5;
+        LightingContext shared(scene, s);
+        PointLighting reused(shared);
+        for (int pass = 0; pass < 2; ++pass)  // a first pass, then one from kept tables
+            for (std::size_t t = 0; t < texels.size(); ++t) {
+                const SquareFootprint& f = texels[t];
+                const int first_round = pass == 0 ? 0 : 1, rounds = pass == 0 ? 1 : 5;
+                double after[3], after_var[3], alone[3], alone_var[3];
+                reused.shade(t, first_round, rounds, f.centre(), &f, after, after_var);
+                LightingContext own(scene, s);
+                PointLighting fresh(own);
+                fresh.shade(t, first_round, rounds, f.centre(), &f, alone, alone_var);
+                INFO(light_technique << ", pass " << pass << ", texel " << t);
+                CHECK(same_bits(after, alone));
+                CHECK(same_bits(after_var, alone_var));
+            }
+    }
+}
