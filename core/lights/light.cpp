@@ -84,7 +84,7 @@ void require_perpendicular(const Vec3& a, const Vec3& b, const char* what) {
 // Blender's spread (SPEC §4): radiance × max(0, 1 − tan a tan θ) × normalisation,
 // a = (π − s)/2. The normalisation 2/(2 + (2a − π) tan a) equals 1/(1 − b cot b)
 // with b = s/2, evaluated by its series where it would cancel. The two
-// constants are the light's: prepared once where many points are weighed.
+// constants are the light's (Light::spread_constants, made with it).
 struct SpreadProfile {
     double tan_a = 0, one_minus_b_cot_b = 1;
     explicit SpreadProfile(double spread) {
@@ -92,6 +92,8 @@ struct SpreadProfile {
         one_minus_b_cot_b = b < 1e-3 ? b * b / 3 + b * b * b * b / 45 : 1 - b / std::tan(b);
         tan_a = 1.0 / std::tan(b);  // tan((π − s)/2) = cot(s/2)
     }
+    explicit SpreadProfile(const Light::SpreadConstants& k)
+        : tan_a(k.cot_half), one_minus_b_cot_b(k.one_minus_b_cot_b) {}
     double factor(double cos_theta) const {
         const double sin_theta = std::sqrt(std::max(0.0, 1 - cos_theta * cos_theta));
         const double tan_theta = sin_theta / std::max(cos_theta, 1e-300);
@@ -99,10 +101,6 @@ struct SpreadProfile {
     }
 };
 
-double spread_factor(double cos_theta, double spread) {
-    if (spread >= kPi) return 1.0;
-    return SpreadProfile(spread).factor(cos_theta);
-}
 
 // Cycles 3.4 spot falloff for the unit direction from the light to the
 // receiver: the cosine to the axis inside the cone, smoothstep over the blend.
@@ -140,7 +138,8 @@ Vec3 planar_radiance(const Light& l, const Vec3& w) {
     double cos_l = -dot(w, normal);
     if (l.two_sided) cos_l = std::abs(cos_l);
     if (cos_l <= 0) return {};
-    return l.emission * spread_factor(cos_l, l.spread);
+    if (l.spread >= kPi) return l.emission;
+    return l.emission * SpreadProfile(l.spread_constants).factor(cos_l);
 }
 
 // Blender's spread (SPEC §4) lets an emitting point reach x only when x lies
@@ -153,15 +152,30 @@ struct SpreadBox {
     double a0, a1, b0, b1;
 };
 
-SpreadBox spread_box(double spread, const Vec3& x, const Vec3& origin, const Vec3& e1,
-                     const Vec3& e2) {
+SpreadBox spread_box(const Light::SpreadConstants& k, const Vec3& x, const Vec3& origin,
+                     const Vec3& e1, const Vec3& e2) {
     const Vec3 d = x - origin;
     const double l1 = dot(e1, e1), l2 = dot(e2, e2);
-    const double z = std::abs(dot(d, normalize(cross(e1, e2))));
-    const double radius = z * std::tan(0.5 * spread);
+    const double z = std::abs(dot(d, k.unit_normal));
+    const double radius = z * k.tan_half;
     const double fa = dot(d, e1) / l1, fb = dot(d, e2) / l2;
-    const double ra = radius / std::sqrt(l1), rb = radius / std::sqrt(l2);
+    const double ra = radius / k.length1, rb = radius / k.length2;
     return {fa - ra, fa + ra, fb - rb, fb + rb};
+}
+
+// The constants spread_box and the falloff take for a light spanned by e1, e2
+// (the same arithmetic as computing them at every call, once).
+Light::SpreadConstants spread_constants(double spread, const Vec3& e1, const Vec3& e2) {
+    Light::SpreadConstants k;
+    const double b = 0.5 * spread;
+    const SpreadProfile profile(spread);
+    k.tan_half = std::tan(b);
+    k.cot_half = profile.tan_a;
+    k.one_minus_b_cot_b = profile.one_minus_b_cot_b;
+    k.unit_normal = normalize(cross(e1, e2));
+    k.length1 = std::sqrt(dot(e1, e1));
+    k.length2 = std::sqrt(dot(e2, e2));
+    return k;
 }
 
 // An ellipse light as its samplers see it from x: whole, or only a clipped part
@@ -176,7 +190,7 @@ EllipseReach ellipse_reach(const Light& l, const Vec3& x) {
     EllipseReach r;
     if (l.spread >= kPi) return r;
     const EllipseLight& e = l.ellipse;
-    const SpreadBox b = spread_box(l.spread, x, e.center, e.axis_a, e.axis_b);
+    const SpreadBox b = spread_box(l.spread_constants, x, e.center, e.axis_a, e.axis_b);
     if (b.a0 <= -1 && b.a1 >= 1 && b.b0 <= -1 && b.b1 >= 1) return r;
     r.whole = false;
     r.part = ClippedDisk::make(std::max(b.a0, -1.0), std::min(b.a1, 1.0), std::max(b.b0, -1.0),
@@ -189,7 +203,7 @@ EllipseReach ellipse_reach(const Light& l, const Vec3& x) {
 std::optional<RectLight> rect_reaching(const Light& l, const Vec3& x) {
     const RectLight& r = l.rect;
     if (l.spread >= kPi) return r;
-    const SpreadBox b = spread_box(l.spread, x, r.corner, r.edge_u, r.edge_v);
+    const SpreadBox b = spread_box(l.spread_constants, x, r.corner, r.edge_u, r.edge_v);
     const double s0 = std::max(b.a0, 0.0), s1 = std::min(b.a1, 1.0);
     const double v0 = std::max(b.b0, 0.0), v1 = std::min(b.b1, 1.0);
     if (!(s0 < s1 && v0 < v1)) return std::nullopt;
@@ -302,6 +316,7 @@ Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v
     Light l = planar_light(LightType::Rect, "rect light", corner, "corner", edge_u, "edge_u",
                            edge_v, "edge_v", radiance, two_sided, spread);
     l.rect = RectLight{corner, edge_u, orthogonal_part(edge_v, edge_u)};
+    l.spread_constants = spread_constants(spread, l.rect.edge_u, l.rect.edge_v);
     return l;
 }
 
@@ -310,6 +325,7 @@ Light make_ellipse_light(const Vec3& center, const Vec3& axis_a, const Vec3& axi
     Light l = planar_light(LightType::Ellipse, "ellipse light", center, "center", axis_a,
                            "axis_u", axis_b, "axis_v", radiance, two_sided, spread);
     l.ellipse = EllipseLight{center, axis_a, orthogonal_part(axis_b, axis_a)};
+    l.spread_constants = spread_constants(spread, l.ellipse.axis_a, l.ellipse.axis_b);
     return l;
 }
 
@@ -644,7 +660,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                                   int cells) {
     constexpr int kTaps = 3, kEdgeTaps = 4;
     const Vec3 normal = normalize(planar_normal(l));
-    const SpreadProfile spread(l.spread);
+    const SpreadProfile spread(l.spread_constants);
     const double da = (a1 - a0) / cells, db = (b1 - b0) / cells;
     // Kernel-weighted mean of the spread factor over a cell; `mixed` tells
     // whether the shape's edge crossed it.

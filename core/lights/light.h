@@ -41,6 +41,15 @@ struct alignas(64) Light {
 
     RectLight rect;          // Rect
     EllipseLight ellipse;    // Ellipse (disk when the semi-axes are equal)
+    // Rect/Ellipse with spread < π: the spread's constants, set by the
+    // factories with the shape, so that the per-point reach test and the
+    // per-sample falloff compute no tangent, normal or length (light.cpp).
+    struct SpreadConstants {
+        double tan_half = 0;                       // tan(spread/2)
+        double cot_half = 0, one_minus_b_cot_b = 1;  // the falloff's (b = spread/2)
+        Vec3 unit_normal;                          // of the light's plane
+        double length1 = 0, length2 = 0;           // of its two spanning vectors
+    } spread_constants;
 
     Vec3 position;           // Point/Spot
     double radius = 0;       // Point/Spot: > 0 makes a disk facing the receiver
