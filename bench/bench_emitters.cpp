@@ -35,6 +35,7 @@
 #include <vector>
 
 #include "render/direct_lighting.h"
+#include "support/emissive_sphere.h"
 
 using namespace omis;
 
@@ -48,28 +49,7 @@ void add_floor(Scene& scene) {
 // A UV sphere of radius 0.5 at height 1.5 with `stacks`×`slices` quads (caps
 // as triangles): 2·slices·(stacks − 1) triangles, emitting 1 W/(m² sr).
 void add_emissive_sphere(Scene& scene, int stacks, int slices) {
-    std::vector<Vec3> p;
-    std::vector<std::array<std::uint32_t, 3>> t;
-    const Vec3 centre(0, 0, 1.5);
-    p.push_back(centre + Vec3(0, 0, 0.5));
-    for (int i = 1; i < stacks; ++i)
-        for (int j = 0; j < slices; ++j) {
-            const double theta = kPi * i / stacks, phi = 2 * kPi * j / slices;
-            p.push_back(centre + 0.5 * Vec3(std::sin(theta) * std::cos(phi),
-                                            std::sin(theta) * std::sin(phi), std::cos(theta)));
-        }
-    p.push_back(centre - Vec3(0, 0, 0.5));
-    const auto ring = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * slices + (j % slices)); };
-    const std::uint32_t bottom = std::uint32_t(p.size() - 1);
-    for (int j = 0; j < slices; ++j) {
-        t.push_back({0, ring(1, j), ring(1, j + 1)});
-        t.push_back({bottom, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
-        for (int i = 1; i + 1 < stacks; ++i) {
-            t.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-            t.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-        }
-    }
-    scene.add_mesh(p, t, Vec3(1, 1, 1));
+    testing::add_emissive_sphere(scene, Vec3(0, 0, 1.5), 0.5, stacks, slices);
 }
 
 // side × side lights over [−2, 2]² at height 1, total power independent of

@@ -15,39 +15,13 @@
 
 #include "render/direct_lighting.h"
 #include "scene/emitter_shapes.h"
+#include "support/emissive_sphere.h"
 #include "support/lighting_settings.h"
 
 using namespace omis;
+using omis::testing::add_emissive_sphere;
 
 namespace {
-
-// A closed UV sphere, outward winding, emitting 1 W/(m² sr).
-void add_emissive_sphere(Scene& scene, const Vec3& centre, double radius, int stacks,
-                         int slices) {
-    std::vector<Vec3> p{centre + Vec3(0, 0, radius)};
-    for (int i = 1; i < stacks; ++i)
-        for (int j = 0; j < slices; ++j) {
-            const double theta = kPi * i / stacks, phi = 2 * kPi * j / slices;
-            p.push_back(centre + radius * Vec3(std::sin(theta) * std::cos(phi),
-                                               std::sin(theta) * std::sin(phi),
-                                               std::cos(theta)));
-        }
-    p.push_back(centre - Vec3(0, 0, radius));
-    const auto ring = [&](int i, int j) {
-        return std::uint32_t(1 + (i - 1) * slices + (j % slices));
-    };
-    const std::uint32_t bottom = std::uint32_t(p.size() - 1);
-    std::vector<std::array<std::uint32_t, 3>> t;
-    for (int j = 0; j < slices; ++j) {
-        t.push_back({0, ring(1, j), ring(1, j + 1)});
-        t.push_back({bottom, ring(stacks - 1, j + 1), ring(stacks - 1, j)});
-        for (int i = 1; i + 1 < stacks; ++i) {
-            t.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
-            t.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
-        }
-    }
-    scene.add_mesh(p, t, Vec3(1, 1, 1));
-}
 
 // issue 8's race scene in small: an emissive sphere with a square lamp above
 // it (hidden by the sphere from the receivers below it), and an opaque plate

@@ -14,25 +14,13 @@
 #include <vector>
 
 #include "render/direct_lighting.h"
+#include "support/square_footprint.h"
 #include "sampling/irradiance.h"
 
 using namespace omis;
+using omis::testing::SquareFootprint;
 
 namespace {
-
-// A square of the floor z = 0 around `centre`, as a texel's footprint.
-class SquareFootprint : public Footprint {
-public:
-    SquareFootprint(const Vec3& centre, double half) : centre_(centre), half_(half) {}
-    SurfacePoint at(double u, double v) const override {
-        const Vec3 x = centre_ + Vec3((2 * u - 1) * half_, (2 * v - 1) * half_, 0);
-        return SurfacePoint{x, Vec3(0, 0, 1), Vec3(0, 0, 1)};
-    }
-
-private:
-    Vec3 centre_;
-    double half_;
-};
 
 // A floor, a ceiling light above the footprint at the origin whose shadow
 // edge (an occluding board over x < 0 at half its height) crosses the

@@ -10,25 +10,12 @@
 #include <vector>
 
 #include "render/direct_lighting.h"
+#include "support/square_footprint.h"
 
 using namespace omis;
+using omis::testing::SquareFootprint;
 
 namespace {
-
-// A square of the floor z = 0 around `centre`, as a texel's footprint.
-class SquareFootprint : public Footprint {
-public:
-    SquareFootprint(const Vec3& centre, double half) : centre_(centre), half_(half) {}
-    SurfacePoint at(double u, double v) const override {
-        const Vec3 x = centre_ + Vec3((2 * u - 1) * half_, (2 * v - 1) * half_, 0);
-        return SurfacePoint{x, Vec3(0, 0, 1), Vec3(0, 0, 1)};
-    }
-    SurfacePoint centre() const { return at(0.5, 0.5); }
-
-private:
-    Vec3 centre_;
-    double half_;
-};
 
 // The race's `area` scene's kind: a plain rect and a spread rect (whose reach
 // ends inside the floor), plus a narrow spread rect that reaches one corner.
