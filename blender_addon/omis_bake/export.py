@@ -40,6 +40,7 @@ class Part:
     mesh_id: int
     triangles: int
     tri_loops: np.ndarray = None   # (T, 3) loop indices of the evaluated mesh (color attributes)
+    uv_area: float = 0.0           # its triangles' area in UV space (the image is 1)
 
 
 @dataclass
@@ -78,30 +79,39 @@ class Export:
 
 @dataclass
 class _LocalMesh:
-    """An evaluated mesh in object space, ready to be transformed per instance."""
+    """An evaluated mesh in object space, ready to be transformed per instance.
+    Only baked objects carry their loops, shading normals and UVs: omis shades
+    nothing else, and every other mesh (occluders, emitters) is positions and
+    triangles to it."""
     co: np.ndarray                 # (V, 3) float64
     tri_vert: np.ndarray           # (T, 3) int32
-    tri_loop: np.ndarray           # (T, 3) int32
-    loop_normal: np.ndarray        # (L, 3) float64
     material_index: np.ndarray     # (T,) int32
+    tri_loop: np.ndarray = None    # (T, 3) int32, bake objects only
+    loop_normal: np.ndarray = None # (L, 3) float64, bake objects only
     flat: np.ndarray = None        # (T,) bool: the triangle's polygon is flat-shaded
     uv: np.ndarray = None          # (L, 2) float32, active UV map, bake objects only
     loop_vertex: np.ndarray = None # (L,) int32, bake objects only
     n_loops: int = 0
 
 
-def _read_mesh(me, want_uv):
+def _read_mesh(me, baked):
     me.calc_loop_triangles()
-    me.calc_normals_split()
-    nv, nl, nt = len(me.vertices), len(me.loops), len(me.loop_triangles)
+    nv, nt = len(me.vertices), len(me.loop_triangles)
     co = np.empty(nv * 3, np.float32)
     me.vertices.foreach_get("co", co)
     tri_vert = np.empty(nt * 3, np.int32)
     me.loop_triangles.foreach_get("vertices", tri_vert)
-    tri_loop = np.empty(nt * 3, np.int32)
-    me.loop_triangles.foreach_get("loops", tri_loop)
     mat = np.empty(nt, np.int32)
     me.loop_triangles.foreach_get("material_index", mat)
+    local = _LocalMesh(co.reshape(-1, 3).astype(np.float64), tri_vert.reshape(-1, 3), mat)
+    if not baked:
+        # Split normals are the costly part of a read (a 16k-triangle emitter:
+        # about half its export); only shading needs them.
+        return local
+    me.calc_normals_split()
+    nl = len(me.loops)
+    tri_loop = np.empty(nt * 3, np.int32)
+    me.loop_triangles.foreach_get("loops", tri_loop)
     ln = np.empty(nl * 3, np.float32)
     me.loops.foreach_get("normal", ln)
     smooth = np.empty(len(me.polygons), bool)
@@ -111,22 +121,22 @@ def _read_mesh(me, want_uv):
     smooth |= bool(getattr(me, "use_auto_smooth", False))
     tri_poly = np.empty(nt, np.int32)
     me.loop_triangles.foreach_get("polygon_index", tri_poly)
-    local = _LocalMesh(co.reshape(-1, 3).astype(np.float64), tri_vert.reshape(-1, 3),
-                       tri_loop.reshape(-1, 3), ln.reshape(-1, 3).astype(np.float64), mat,
-                       flat=~smooth[tri_poly], n_loops=nl)
-    if want_uv:
-        layer = me.uv_layers.active
-        if layer is not None:
-            uv = np.empty(nl * 2, np.float32)
-            layer.data.foreach_get("uv", uv)
-            local.uv = uv.reshape(-1, 2)
-        lv = np.empty(nl, np.int32)
-        me.loops.foreach_get("vertex_index", lv)
-        local.loop_vertex = lv
+    local.tri_loop = tri_loop.reshape(-1, 3)
+    local.loop_normal = ln.reshape(-1, 3).astype(np.float64)
+    local.flat = ~smooth[tri_poly]
+    local.n_loops = nl
+    layer = me.uv_layers.active
+    if layer is not None:
+        uv = np.empty(nl * 2, np.float32)
+        layer.data.foreach_get("uv", uv)
+        local.uv = uv.reshape(-1, 2)
+    lv = np.empty(nl, np.int32)
+    me.loops.foreach_get("vertex_index", lv)
+    local.loop_vertex = lv
     return local
 
 
-def _to_local_mesh(ob_eval, want_uv):
+def _to_local_mesh(ob_eval, baked):
     """The evaluated geometry of an object, or None if it has none."""
     try:
         me = ob_eval.to_mesh()
@@ -137,7 +147,7 @@ def _to_local_mesh(ob_eval, want_uv):
     try:
         if len(me.polygons) == 0:
             return None
-        return _read_mesh(me, want_uv)
+        return _read_mesh(me, baked)
     finally:
         ob_eval.to_mesh_clear()
 
@@ -386,6 +396,13 @@ def _modifier_differences(ob):
 # The exporter
 
 
+def _uv_area(corner_uvs):
+    """Total area of triangles given by their corners' UVs (3T, 2)."""
+    uv = np.asarray(corner_uvs, np.float64).reshape(-1, 3, 2)
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    return float(0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum())
+
+
 def _corner_normals(positions, tris, loop_normals, flat):
     """Per-corner shading normals (3T, 3) float32. Cycles shades a flat-shaded
     polygon with each triangle's own geometric normal (its Ng), not the
@@ -444,7 +461,7 @@ class _Exporter:
             if ob.hide_render or ob.name_full not in visible_names:
                 raise BakeError(f'"{ob.name}" is not enabled for rendering')
             ob_eval = ob.evaluated_get(depsgraph)
-            local = _to_local_mesh(ob_eval, want_uv=True)
+            local = _to_local_mesh(ob_eval, baked=True)
             if local is None:
                 raise BakeError(f'"{ob.name}" has no faces to bake')
             self._bake_local[ob.name_full] = local
@@ -537,13 +554,17 @@ class _Exporter:
         if not math.isfinite(det) or abs(det) < 1e-30:
             return  # scaled to nothing
         positions = (local.co @ A.T + M[:3, 3]).astype(np.float32)
-        normal_matrix = np.linalg.inv(A).T
-        normals = local.loop_normal @ normal_matrix.T
-        length = np.linalg.norm(normals, axis=1, keepdims=True)
-        normals = np.where(length > 0, normals / np.where(length > 0, length, 1), 0)
+        shaded = local.loop_normal is not None  # a baked object's own read
+        normals = None
+        if shaded:
+            normal_matrix = np.linalg.inv(A).T
+            normals = local.loop_normal @ normal_matrix.T
+            length = np.linalg.norm(normals, axis=1, keepdims=True)
+            normals = np.where(length > 0, normals / np.where(length > 0, length, 1), 0)
         tri_vert, tri_loop = local.tri_vert, local.tri_loop
         if det < 0:  # mirrored: keep the winding counter-clockwise seen from the front
-            tri_vert, tri_loop = tri_vert[:, [0, 2, 1]], tri_loop[:, [0, 2, 1]]
+            tri_vert = tri_vert[:, [0, 2, 1]]
+            tri_loop = tri_loop[:, [0, 2, 1]] if shaded else None
 
         materials = [slot.material for slot in ob_eval.material_slots]
         emissions = self._slot_emission(materials)
@@ -574,18 +595,21 @@ class _Exporter:
             count = int(select.sum())
             if count == 0:
                 continue
-            tris, loops = tri_vert[select], tri_loop[select]
+            tris = tri_vert[select]
+            loops = tri_loop[select] if shaded else None
             if len(groups) > 1:
                 used, inverse = np.unique(tris, return_inverse=True)
                 verts, tris = positions[used], inverse.reshape(-1, 3).astype(np.int32)
             else:
                 verts = positions
-            corner_normals = _corner_normals(verts, tris, normals[loops.ravel()],
-                                             local.flat[select])
+            corner_normals = (_corner_normals(verts, tris, normals[loops.ravel()],
+                                              local.flat[select]) if shaded else None)
             uvs = None
             baked = bake_name is not None and (image is not None or attr is not None)
+            uv_area = 0.0
             if baked and image is not None:
                 uvs = np.ascontiguousarray(local.uv[loops.ravel()], dtype=np.float32)
+                uv_area = _uv_area(uvs)
             mesh_id = self.scene.add_mesh(np.ascontiguousarray(verts), tris, corner_normals,
                                           uvs, emission)
             if receiver is not None:
@@ -598,7 +622,7 @@ class _Exporter:
             if emission is not None:
                 self.counts["emissive_meshes"] += 1
             if baked:
-                part = Part(ob_eval.name, mesh_id, count, tri_loops=loops)
+                part = Part(ob_eval.name, mesh_id, count, tri_loops=loops, uv_area=uv_area)
                 (image.parts if image is not None else attr.parts).append(part)
 
     # -- lights --
@@ -792,7 +816,7 @@ class _Exporter:
         key = (ob.original.name_full, ob.data.name_full if ob.data is not None else "")
         if cacheable and key in self._mesh_cache:
             return self._mesh_cache[key]
-        local = _to_local_mesh(ob, want_uv=False)
+        local = _to_local_mesh(ob, baked=False)
         if cacheable:
             self._mesh_cache[key] = local
         return local

@@ -63,7 +63,7 @@ class BakeJob:
         self.units = []
         for target in self.export.images:
             for part in target.parts:
-                self.units.append(_Unit('uv', part, target, target.width * target.height))
+                self.units.append(_Unit('uv', part, target, texels_of(part, target)))
         for target in self.export.attributes:
             for part in target.parts:
                 self.units.append(_Unit('corner', part, target, 3 * part.triangles))
@@ -271,6 +271,14 @@ class BakeJob:
             "warnings": list(self.export.warnings),
             "exported": dict(self.export.counts),
         }
+
+
+def texels_of(part, target):
+    """About how many texels of target's image a part covers: what its bake costs.
+    A time limit and the progress bar share the bake out by these weights, so
+    objects sharing an image take time in proportion to their texels (equal
+    shares gave a small object many times the samples of a large one)."""
+    return min(max(part.uv_area, 0.0), 1.0) * target.width * target.height
 
 
 def accuracy_cost(errors, seconds, unit_stats):

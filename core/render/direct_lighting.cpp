@@ -772,8 +772,12 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
         for (int k : active) n.push_back(counts[k]);
         StrategyOptions options = p_.settings.options;
         options.sequence_rounds = true;  // each technique draws one scrambled sequence
-        it = cache.emplace(key, MisEstimator(p_.settings.strategy, int(active.size()), 3, n,
-                                             options))
+        // One technique: every weighting is 1 and the optimal α is the mean
+        // itself, so each strategy's estimate is the plain mean of f/p, which
+        // the balance heuristic forms without the optimal moments and solve
+        // (~5 % of a one-round pass on the race's one-technique scenes).
+        const Strategy strategy = active.size() == 1 ? Strategy::Balance : p_.settings.strategy;
+        it = cache.emplace(key, MisEstimator(strategy, int(active.size()), 3, n, options))
                  .first;
     }
     it->second.reset();
@@ -792,7 +796,17 @@ void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footpri
     // unbiased; a light that applies nowhere it was probed is left to the
     // other techniques there.
     const int n_probes = probes.count();
-    set_anchor(footprint);
+    // Anchored weights serve only per-point tables by unoccluded irradiance;
+    // an anchor costs a slot per integrated light (16k on an emissive mesh).
+    bool irradiance_tables = false;
+    for (int k : p_.techniques) {
+        const Technique& t = p_.settings.techniques[k];
+        irradiance_tables = irradiance_tables ||
+                            (!t.bsdf && !p_.selector(t.selection) &&
+                             (t.selection == LightSelection::Unoccluded ||
+                              t.selection == LightSelection::Defensive));
+    }
+    set_anchor(irradiance_tables ? footprint : nullptr);
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
         if (!t.bsdf) {
@@ -926,7 +940,7 @@ Vec3 PointLighting::Impl::delta_lighting(const SurfacePoint& p, double u) {
     for (int j = 0; j < draws; ++j) {
         const double uj = u + double(j) / draws;
         const auto pick =
-            p_.delta_selector.sample(p.x, p.n, uj - std::floor(uj), &delta_memo_);
+            p_.delta_selector->sample(p.x, p.n, uj - std::floor(uj), &delta_memo_);
         if (pick) total += contribution(pick->light) / pick->pmf;
     }
     return total / double(draws);
@@ -1503,22 +1517,27 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
     for (int k : techniques) {
         const Technique& t = settings.techniques[k];
         if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
-        if (t.selection == LightSelection::Uniform && uniform_selector.empty())
-            uniform_selector = scene.light_selector(LightSelector::Kind::Uniform, false);
-        if (t.selection == LightSelection::Power && power_selector.empty())
-            power_selector = scene.light_selector(LightSelector::Kind::Power, false);
-        if (t.selection == LightSelection::Tree && tree_selector.empty())
-            tree_selector = scene.light_selector(LightSelector::Kind::Tree, false);
+        if (t.selection == LightSelection::Uniform && !uniform_selector)
+            uniform_selector = &scene.light_selector(LightSelector::Kind::Uniform, false);
+        if (t.selection == LightSelection::Power && !power_selector)
+            power_selector = &scene.light_selector(LightSelector::Kind::Power, false);
+        if (t.selection == LightSelection::Tree && !tree_selector)
+            tree_selector = &scene.light_selector(LightSelector::Kind::Tree, false);
     }
     if (plan.sample_delta_lights)
-        delta_selector = scene.light_selector(LightSelector::Kind::Tree, true);
+        delta_selector = &scene.light_selector(LightSelector::Kind::Tree, true);
 }
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {
     switch (selection) {
-        case LightSelection::Uniform: return uniform_selector.empty() ? nullptr : &uniform_selector;
-        case LightSelection::Power: return power_selector.empty() ? nullptr : &power_selector;
-        case LightSelection::Tree: return &tree_selector;
+        case LightSelection::Uniform:
+            return uniform_selector && !uniform_selector->empty() ? uniform_selector : nullptr;
+        case LightSelection::Power:
+            return power_selector && !power_selector->empty() ? power_selector : nullptr;
+        case LightSelection::Tree: {
+            static const LightSelector kNoLights;  // a tree technique never built: draws nothing
+            return tree_selector ? tree_selector : &kNoLights;
+        }
         case LightSelection::Unoccluded:
         case LightSelection::Defensive: return nullptr;
     }

@@ -93,8 +93,13 @@ public:
     std::vector<TinyShape> tiny_shapes;
     // Selection of integrated lights for `uniform`, `power` and `tree`
     // (built when a technique uses it), and of delta lights when the plan
-    // estimates their sum by drawing some (plan.sample_delta_lights).
-    LightSelector uniform_selector, power_selector, tree_selector, delta_selector;
+    // estimates their sum by drawing some (plan.sample_delta_lights). The
+    // scene's own, built once per scene (a tree over 16k emissive triangles is
+    // megabytes: not copied per bake); null where no technique uses one.
+    const LightSelector* uniform_selector = nullptr;
+    const LightSelector* power_selector = nullptr;
+    const LightSelector* tree_selector = nullptr;
+    const LightSelector* delta_selector = nullptr;
     const LightSelector* selector(LightSelection selection) const;
     // Per texel (PointLighting::shade's stream), what a bake's later passes
     // reuse: the techniques taking part and their light tables.

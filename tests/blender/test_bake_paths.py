@@ -293,11 +293,33 @@ def test_time_budget_and_noise_target():
     check("bsdf" in stats["plan"], stats["plan"])
 
 
+def test_shared_image_shares_time_by_texels():
+    # Two objects baked into one image, one covering a fifth of it and one the
+    # rest: a time limit is shared out by the texels each covers (1 : 4), so
+    # both end with about the same samples per texel.
+    U.reset_scene()
+    img = U.make_image("atlas", 32)
+    mat = U.image_material("atlas_mat", img)
+    small = U.grid_mesh("Small", size=1.0, location=(0, 0, 0), uv_rect=(0.0, 0.0, 0.2, 1.0))
+    large = U.grid_mesh("Large", size=1.0, location=(1.2, 0, 0), uv_rect=(0.2, 0.0, 1.0, 1.0))
+    for ob in (small, large):
+        ob.data.materials.append(mat)
+    U.add_light('AREA', "lamp", energy=300.0, location=(0.6, 0.2, 1.5), size=0.5)
+    U.select_only([small, large])
+    job = BakeJob(bpy.context, [small, large],
+                  settings_from(bpy.context.scene.omis, {"time_budget": 0.2}))
+    weight = {u.part.object_name: u.weight for u in job.units}
+    # UVs are float32 (0.2 is stored as 0.2000000030): relative 1e-6.
+    check(abs(weight["Small"] / (0.2 * 32 * 32) - 1) < 1e-6
+          and abs(weight["Large"] / (0.8 * 32 * 32) - 1) < 1e-6, f"unit weights {weight}")
+
+
 def main():
     for test in (test_errors_leave_images_untouched, test_no_lights_is_black_with_warning,
                  test_cancel_and_failure_leave_images_untouched, test_worker_thread_and_cancel,
                  test_image_modes_clear_margin_srgb, test_time_budget_and_noise_target,
-                 test_color_attributes_and_operator_arguments):
+                 test_color_attributes_and_operator_arguments,
+                 test_shared_image_shares_time_by_texels):
         start = time.perf_counter()
         test()
         print(f"ok {test.__name__} ({time.perf_counter() - start:.2f} s)")

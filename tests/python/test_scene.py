@@ -98,6 +98,30 @@ def test_rect_light_matches_lambert(techniques, samples, strategy):
     assert value[4].min() > 0  # the half-visible light still lights the tilted receiver
 
 
+@pytest.mark.parametrize("strategy", ["optimal-direct", "optimal-progressive"])
+def test_rare_event_share_is_restored_far_from_the_light(strategy):
+    # The far receiver (1.5, 0.5, 0) with power/solid-angle + bsdf [6, 2]: the
+    # bsdf technique seldom hits the light, so the balance estimate misses
+    # that share alike in nearly every round (rms error 3.2 of its reported σ
+    # over seeds 11..110: its variance misses it too). The optimal strategies'
+    # correction restores it in every half of the sequence alike; it must be
+    # kept, not dropped by the level test or a fallback to balance. Then the
+    # errors over 20 seeds have an rms of at most 1.5 reported σ: for honest σ
+    # it is about 1 (± 0.16 for 20 normal draws, so 1.5 is 3 SE above), while
+    # a dropped correction leaves balance's ~3.2. Measured: 0.07 direct,
+    # 0.03 progressive.
+    scene = rect_scene()
+    point, normal = POINTS[2:3], NORMALS[2:3]
+    expected = expected_rect(point, normal)[0]
+    z = []
+    for seed in range(11, 31):
+        value, variance = omis.direct_lighting(scene, point, normal, "power/solid-angle, bsdf",
+                                               [6, 2], rounds=16, strategy=strategy, seed=seed)
+        z.append((value[0] - expected) / np.sqrt(variance[0]))
+    rms = float(np.sqrt(np.mean(np.square(z))))
+    assert rms <= 1.5, f"{strategy}: rms error {rms:.2f} reported σ"
+
+
 def test_normals_need_not_be_unit_and_float32_is_accepted():
     scene = rect_scene()
     a = omis.direct_lighting(scene, POINTS, NORMALS, seed=3)
