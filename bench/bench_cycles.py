@@ -2,7 +2,7 @@
 
     bash scripts/blender_run.sh bench/bench_cycles.py [--out DIR] [--quick]
         [--scenes a,b,...] [--budgets 0.05,0.1,0.25,0.5,1,2] [--ref-seconds S] [--size N]
-        [--techniques bsdf,uniform/solid-angle,...] [--equal-samples]
+        [--techniques bsdf,uniform/solid-angle,...] [--equal-samples [--spp 4,16,64]]
 
 Scenes: every scene of the Cycles-agreement suite (tests/blender/cycles_scenes.py
 SCENES, read at start-up; EXCLUDED lists those where omis and Cycles differ by
@@ -211,7 +211,7 @@ def run_scene(name, args):
 
     rows = []
     for i, budget in enumerate(args.budgets):
-        spp = spp_for(budget, t0, k)
+        spp = int(budget) if args.spp else spp_for(budget, t0, k)
         x, t = cycles_run(objects, image, spp, 10 + i)
         rows.append(dict(scene=name, strategy="cycles", budget=budget, seconds=t,
                          bake_seconds=t, samples_per_texel=spp, rel_mse=ref_c.rel_mse(x),
@@ -343,7 +343,13 @@ def main():
     parser.add_argument("--equal-samples", action="store_true",
                         help="omis takes Cycles' samples per texel at each budget instead of "
                              "the time budget (error per sample; read the @spp column)")
+    parser.add_argument("--spp", default=None,
+                        help="with --equal-samples: Cycles' samples per texel, comma-separated, "
+                             "instead of those the budgets buy (the budget column then shows "
+                             "them): the same counts on a loaded machine")
     args = parser.parse_args(script_args())
+    if args.spp and not args.equal_samples:
+        raise SystemExit("--spp: needs --equal-samples")
     if args.techniques:
         global TECHNIQUES_OVERRIDE
         names = {name: ident for ident, name in TECHNIQUE_NAME.items()}
@@ -364,6 +370,8 @@ def main():
         if name not in SCENES:
             raise SystemExit(f"unknown scene {name!r}; known: {', '.join(SCENES)}")
     args.budgets = [float(b) for b in args.budgets.split(",")] if args.budgets else budgets
+    if args.spp:
+        args.budgets = [float(int(n)) for n in args.spp.split(",")]
     args.ref_seconds = args.ref_seconds or ref_seconds
     args.size = args.size or size
     out = os.path.abspath(args.out)
