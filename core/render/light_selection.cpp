@@ -14,6 +14,18 @@
 namespace omis {
 namespace {
 
+// A tree node is a cluster at a receiver — its lights drawn ∝ power, no
+// longer ∝ the importance of its children — where its bounding sphere
+// subtends less than asin(kClusterSine) from the receiver and its normal
+// cone is narrower than acos(kClusterCone): the importance of its lights
+// then differs by about ±2·kClusterSine in distance and by the spread of
+// their normals, so a draw by power costs a little variance (bench/results/
+// emitters.txt) and takes a binary search in place of the walk down the
+// rest of the tree — the walk's length then grows with the angular size of
+// the lights, not with their number.
+constexpr double kClusterSine = 0.1;
+constexpr double kClusterCone = 0.7;
+
 // The cone that holds both cones (pbrt-v4's DirectionCone Union): axis a.axis
 // rotated toward b.axis so that the new half-angle just covers both.
 void merge_cones(LightSelector::Bounds& a, const LightSelector::Bounds& b) {
@@ -282,6 +294,15 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
         }
         if (!entries.empty()) {
             build(entries, 0, entries.size(), 0);
+            // build() left the entries in leaf order.
+            order_cdf_.assign(1, 0.0);
+            clusters_ = true;
+            for (std::size_t i = 0; i < entries.size(); ++i) {
+                order_light_.push_back(entries[i].light);
+                per_light_[entries[i].light].position = std::uint32_t(i);
+                order_cdf_.push_back(order_cdf_.back() + entries[i].bounds.power);
+                clusters_ = clusters_ && order_cdf_[i + 1] > order_cdf_[i];
+            }
             root_ = nodes_[0].bounds;
             collapse(0, 0, 0);
         }
@@ -299,6 +320,8 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
     const std::uint32_t index = std::uint32_t(nodes_.size());
     nodes_.emplace_back();
     build_bounds_.emplace_back();
+    nodes_[index].first = std::uint32_t(begin);
+    nodes_[index].end = std::uint32_t(end);
     if (end - begin == 1) {
         build_bounds_[index] = entries[begin].bounds;
         nodes_[index].bounds = PackedBounds(entries[begin].bounds);
@@ -354,6 +377,8 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
         const Node& member = nodes_[members[i]];
         const std::uint64_t path = trail | (std::uint64_t(i) << (2 * depth));
         wide_[index].set(i, member.bounds);
+        links_[index].first[i] = member.first;
+        links_[index].end = member.end;  // the last child's
         if (member.light != ~0u) {
             links_[index].index[i] = member.light;
             links_[index].is_leaf |= std::uint8_t(1u << i);
@@ -403,8 +428,8 @@ F4 min4(F4 a, F4 b) { return a < b ? a : b; }
 // cull allowances of 1e-4 (float's rounding of the cosines is ~1e-7), and a
 // value that reaches kept at least FLT_MIN, so that underflow never tells a
 // reaching light from one that cannot reach.
-void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, double grow,
-                                         float out[kWidth]) const {
+std::uint32_t LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, double grow,
+                                                  float out[kWidth]) const {
     // A region (grow > 0): bounds grown by its radius, no horizon cull.
     const bool horizon = !(grow > 0);
     const F4 power4 = load(power), r = load(radius) + (horizon ? 0.0f : round_up(grow)),
@@ -440,14 +465,21 @@ void LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, double gr
     value = dist2 <= r2 ? power4 / max4(r2, splat(FLT_MIN)) : value;  // x among the lights
     value = power4 > 0.0f ? value : splat(0);
     std::memcpy(out, &value, sizeof value);
+    const auto cluster = r2 < float(kClusterSine * kClusterSine) * dist2 &&
+                         cos_o >= float(kClusterCone) && power4 > 0.0f;
+    std::uint32_t clusters = 0;
+    for (int i = 0; i < kWidth; ++i) clusters |= cluster[i] ? 1u << i : 0u;
+    return clusters;
 }
 
-void LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
-                                        double p[kWidth]) const {
+std::uint32_t LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
+                                                 double p[kWidth]) const {
     const WideNode& node = wide_[index];
-    const int count = links_[index].count;
+    const WideLinks& links = links_[index];
+    const int count = links.count;
     float importance[kWidth];
-    node.importance(at.x, at.n, at.radius, importance);
+    std::uint32_t clusters = node.importance(at.x, at.n, at.radius, importance);
+    clusters = clusters_ ? clusters & ~std::uint32_t(links.is_leaf) & ((1u << count) - 1) : 0;
     double total = 0;
     for (int i = 0; i < count; ++i) total += p[i] = double(importance[i]);
     if (!(total > 0)) {
@@ -457,6 +489,7 @@ void LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
         for (int i = 0; i < count; ++i) total += p[i] = double(node.power[i]);
     }
     for (int i = 0; i < count; ++i) p[i] /= total;
+    return clusters;
 }
 
 void LightSelector::focus(Memo& memo, const Receiver& at) const {
@@ -482,9 +515,10 @@ void LightSelector::focus(Memo& memo, const Receiver& at) const {
 }
 
 const double* LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
-                                                 Memo* memo, double scratch[kWidth]) const {
+                                                 Memo* memo, double scratch[kWidth],
+                                                 std::uint32_t& clusters) const {
     if (!memo) {
-        child_probabilities(index, at, scratch);
+        clusters = child_probabilities(index, at, scratch);
         return scratch;
     }
     // The memo is focused on (x, n): sample and pmf call root_reaches first.
@@ -494,8 +528,9 @@ const double* LightSelector::child_probabilities(std::uint32_t index, const Rece
     if (e.stamp != memo->stamp || e.node != index) {
         e.node = index;
         e.stamp = memo->stamp;
-        child_probabilities(index, at, e.p);
+        e.clusters = child_probabilities(index, at, e.p);
     }
+    clusters = e.clusters;
     return e.p;
 }
 
@@ -536,7 +571,8 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
     std::uint32_t node = 0;
     double scratch[kWidth];
     for (;;) {
-        const double* p = child_probabilities(node, at, memo, scratch);
+        std::uint32_t clusters;
+        const double* p = child_probabilities(node, at, memo, scratch, clusters);
         const WideLinks& links = links_[node];
         // The child whose share of [0, 1) holds u; rounding past the last
         // share falls to the last child that has one.
@@ -546,10 +582,27 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
         while (!(p[i] > 0) && i > 0) below -= p[--i];
         u = std::clamp((u - below) / p[i], 0.0, std::nextafter(1.0, 0.0));
         pmf *= p[i];
+        std::uint32_t light = ~0u;
         if (links.is_leaf & (1u << i)) {
+            light = links.index[i];
+        } else if (clusters & (1u << i)) {
+            // A cluster: its lights ∝ power, u in its share of their CDF.
+            std::uint32_t begin, end;
+            range_of(links, i, begin, end);
+            const double target =
+                order_cdf_[begin] + u * (order_cdf_[end] - order_cdf_[begin]);
+            const std::uint32_t position = std::uint32_t(std::clamp<std::ptrdiff_t>(
+                std::upper_bound(order_cdf_.begin() + begin + 1, order_cdf_.begin() + end + 1,
+                                 target) -
+                    (order_cdf_.begin() + 1),
+                std::ptrdiff_t(begin), std::ptrdiff_t(end) - 1));
+            pmf *= share_in(position, begin, end);
+            light = order_light_[position];
+        }
+        if (light != ~0u) {
             if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
-            if (memo) memo->drawn = links.index[i], memo->drawn_pmf = pmf;
-            return SelectedLight{links.index[i], pmf};
+            if (memo) memo->drawn = light, memo->drawn_pmf = pmf;
+            return SelectedLight{light, pmf};
         }
         node = links.index[i];
     }
@@ -573,8 +626,15 @@ double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) c
         const int i = int((l.trail >> (2 * level)) & 3);
         const WideLinks& links = links_[node];
         if (i >= links.count) return 0;  // a light of zero power: not in the tree
-        pmf *= child_probabilities(node, at, memo, scratch)[i];
+        std::uint32_t clusters;
+        pmf *= child_probabilities(node, at, memo, scratch, clusters)[i];
         if (links.is_leaf & (1u << i)) return links.index[i] == light ? pmf : 0.0;
+        if (clusters & (1u << i)) {
+            std::uint32_t begin, end;
+            range_of(links, i, begin, end);
+            if (l.position < begin || l.position >= end) return 0;  // not in the tree
+            return pmf * share_in(l.position, begin, end);
+        }
         node = links.index[i];
     }
     return 0;

@@ -12,8 +12,12 @@
 //            lights whose nodes bound position, power and the cone of emission
 //            normals; each step down picks a child ∝ a conservative estimate of
 //            its contribution at (x, n). Built binary (median splits), stored
-//            4-wide (two binary levels per node). Every draw ends at a light:
-//            the pmfs sum to 1 wherever the tree can reach (x, n).
+//            4-wide (two binary levels per node). A node small as seen from
+//            x (a cluster: kClusterSine) is not walked further: its lights
+//            are drawn ∝ power, by binary search in a CDF over the tree's
+//            leaf order, where each node's lights lie side by side. Every
+//            draw ends at a light: the pmfs sum to 1 wherever the tree can
+//            reach (x, n).
 //            Unbounded lights (sun, world) are picked uniformly beside the
 //            tree.
 #pragma once
@@ -81,6 +85,7 @@ public:
         struct Entry {
             std::uint32_t node = 0, stamp = 0;  // valid when stamp is the memo's
             double p[4] = {};                   // child probabilities
+            std::uint32_t clusters = 0;         // bit i: child i is a cluster
         };
         std::vector<Entry> slots;
     };
@@ -142,6 +147,7 @@ private:
         PackedBounds bounds;
         std::uint32_t second_child = 0;  // interior: first child is the next node
         std::uint32_t light = ~0u;       // leaf: light id; interior: ~0u
+        std::uint32_t first = 0, end = 0;  // its lights' positions in leaf order
     };
     struct Entry {
         Bounds bounds;
@@ -162,25 +168,45 @@ private:
               two_sided[kWidth] = {};  // 1 or 0
         void set(int i, const PackedBounds& b);
         // PackedBounds::importance of each child in single precision (0 past
-        // count, and never 0 where a child's bounds reach (x, n)).
-        void importance(const Vec3& x, const Vec3& n, double grow, float out[kWidth]) const;
+        // count, and never 0 where a child's bounds reach (x, n)). Returns
+        // the children that are clusters at (x, grow): bit i for child i.
+        std::uint32_t importance(const Vec3& x, const Vec3& n, double grow,
+                                 float out[kWidth]) const;
     };
     // Where a wide node's children lead, apart from their bounds: a step down
     // whose probabilities a memo holds reads only these 20 bytes (three
     // nodes to a cache line) instead of the bounds' three lines.
+    // first[i]: where child i's lights start in leaf order (they end where
+    // the next child's start, the last child's at `end`).
     struct WideLinks {
         std::uint32_t index[kWidth] = {};     // wide node, or light id where is_leaf
+        std::uint32_t first[kWidth] = {}, end = 0;
         std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
     };
     std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
     // The probability of each child of a wide node: ∝ the children's
     // importance, or ∝ their power where none's bounds reach (x, n) although
     // the parent's did, so that every draw ends at a light and the pmfs sum
-    // to 1.
-    void child_probabilities(std::uint32_t node, const Receiver& at, double p[kWidth]) const;
+    // to 1. Returns the children that are clusters (bit i for child i):
+    // interior nodes whose bounding sphere subtends less than kClusterSine
+    // from `at` (grown by its radius) and whose normals lie within
+    // kClusterCone of their axis — lights alike as seen from `at`, whose
+    // importance differs little from their power.
+    std::uint32_t child_probabilities(std::uint32_t node, const Receiver& at,
+                                      double p[kWidth]) const;
     // The same through a memo focused on `at` (root_reaches does so).
     const double* child_probabilities(std::uint32_t node, const Receiver& at, Memo* memo,
-                                      double scratch[kWidth]) const;
+                                      double scratch[kWidth], std::uint32_t& clusters) const;
+    // Child i's lights in leaf order: [begin, end).
+    void range_of(const WideLinks& links, int i, std::uint32_t& begin, std::uint32_t& end) const {
+        begin = links.first[i];
+        end = i + 1 < links.count ? links.first[i + 1] : links.end;
+    }
+    // The share of leaf position `position` in the range [begin, end), by power.
+    double share_in(std::uint32_t position, std::uint32_t begin, std::uint32_t end) const {
+        return (order_cdf_[position + 1] - order_cdf_[position]) /
+               (order_cdf_[end] - order_cdf_[begin]);
+    }
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
     bool root_reaches(const Receiver& at, Memo* memo) const;
@@ -195,6 +221,7 @@ private:
         enum Role : std::uint8_t { Absent, Selected, Unbounded };
         std::uint64_t trail = 0;  // Tree: child choices, root first, 2 bits each
         double probability = 0;   // Power: the pmf
+        std::uint32_t position = 0;  // Tree: where it lies in leaf order
         Role role = Absent;       // Unbounded: sun, world beside the tree
     };
     std::vector<PerLight> per_light_;
@@ -207,6 +234,14 @@ private:
     std::vector<WideLinks> links_;      // per wide node
     PackedBounds root_;
     std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
+    // The bounded lights in leaf order (a node's lie side by side), and the
+    // cumulative sum of their powers (order_cdf_[0] = 0), for draws inside
+    // a cluster. clusters_ is false where some light's share of the sum
+    // rounds to 0 (a power below ~1e-16 of the total): then no node is a
+    // cluster, as such a light could never be drawn from one.
+    std::vector<std::uint32_t> order_light_;
+    std::vector<double> order_cdf_;
+    bool clusters_ = false;
 };
 
 }  // namespace omis

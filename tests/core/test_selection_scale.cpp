@@ -2,6 +2,7 @@
 // to 1 wherever it can draw, and match how often each light is drawn.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -200,4 +201,104 @@ TEST_CASE("a region's tree pmfs sum to 1, match draws, and keep every light that
     CHECK(regions > 40);
     CHECK(reaching > 10000);
     CHECK(checked_draws >= 2);
+}
+
+namespace {
+
+// A ball of `count` small one-sided triangles about `centre`, of sizes over a
+// decade, facing down (−z) within 20° — an emissive patch seen from afar —
+// then, if `near` > 0, that many triangles scattered over [−1, 1]² at 0.2–0.5 m,
+// facing down.
+std::vector<Light> far_ball(int count, const Vec3& centre, double radius, int near) {
+    Pcg32 rng(33, 7);
+    std::vector<Light> lights;
+    auto add = [&](const Vec3& c, double size) {
+        const double tilt = 0.35 * rng.next_double(), phi = 2 * kPi * rng.next_double();
+        const Vec3 normal(std::sin(tilt) * std::cos(phi), std::sin(tilt) * std::sin(phi),
+                          -std::cos(tilt));
+        const Frame f(normal);
+        // make_triangle_light's normal is (p1 − p0) × (p2 − p0): f's x × y = normal.
+        lights.push_back(make_triangle_light(c, c + f.to_world(Vec3(size, 0, 0)),
+                                             c + f.to_world(Vec3(0, size, 0)), Vec3(1, 1, 1),
+                                             false));
+    };
+    for (int i = 0; i < count; ++i) {
+        const Vec3 c = centre + random_direction(rng) * (radius * std::cbrt(rng.next_double()));
+        add(c, 0.003 * std::pow(10.0, rng.next_double()));
+    }
+    for (int i = 0; i < near; ++i)
+        add(Vec3(2 * rng.next_double() - 1, 2 * rng.next_double() - 1,
+                 0.2 + 0.3 * rng.next_double()),
+            0.02 + 0.05 * rng.next_double());
+    return lights;
+}
+
+}  // namespace
+
+TEST_CASE("the light tree draws the lights of a small far cluster by power", "[selection]") {
+    // 2000 triangles in a ball of 0.25 m, 5 m above the receivers: it
+    // subtends less than asin(kClusterSine) = asin(0.1), and its normals lie
+    // within 20° of −z, so each child of the root is a cluster
+    // (light_selection.h): its lights share its probability ∝ their power.
+    const std::vector<Light> lights = far_ball(2000, Vec3(0.3, -0.2, 5), 0.25, 0);
+    const LightSelector s(LightSelector::Kind::Tree, lights, all_ids(lights.size()), 10.0);
+    Pcg32 rng(12, 5);
+    for (int p = 0; p < 4; ++p) {
+        const Vec3 x(2 * rng.next_double() - 1, 2 * rng.next_double() - 1, 0);
+        const Vec3 n(0, 0, 1);
+        LightSelector::Memo memo;
+        std::vector<double> pmf(lights.size()), per_power;
+        double total = 0;
+        for (std::uint32_t l = 0; l < lights.size(); ++l) {
+            total += pmf[l] = s.pmf(x, n, l, &memo);
+            REQUIRE(unoccluded_irradiance(lights[l], x, n) > 0);  // every light faces x
+            REQUIRE(pmf[l] > 0);
+            per_power.push_back(pmf[l] / LightSelector::bounds_of(lights[l], 10.0)->power);
+        }
+        CHECK(total == Approx(1.0).epsilon(1e-12));
+        // pmf / power takes one value per cluster: at most the root's four
+        // children (the walk through the tree would give each light its own,
+        // by its distance and orientation).
+        std::sort(per_power.begin(), per_power.end());
+        int groups = 1;
+        for (std::size_t i = 1; i < per_power.size(); ++i)
+            if (per_power[i] > per_power[i - 1] * (1 + 1e-9)) ++groups;
+        CHECK(groups <= 4);
+        if (p == 0) CHECK(draws_pvalue(s, {x, n, 0.0}, pmf, 200000, rng) > testing::kAlpha);
+    }
+}
+
+TEST_CASE("light tree pmfs with far clusters and near lights sum to 1 and match draws",
+          "[selection]") {
+    // The far ball and 300 lights near the receivers: walks that end in a
+    // cluster for some children and at single lights for others, at points
+    // and over regions (a texel's ball, whose radius widens the clusters).
+    const std::vector<Light> lights = far_ball(3000, Vec3(0, 0, 4), 0.3, 300);
+    const LightSelector s(LightSelector::Kind::Tree, lights, all_ids(lights.size()), 10.0);
+    Pcg32 rng(40, 1);
+    int checked_draws = 0;
+    for (int p = 0; p < 40; ++p) {
+        const Vec3 x(3 * rng.next_double() - 1.5, 3 * rng.next_double() - 1.5,
+                     0.1 * rng.next_double());
+        const LightSelector::Receiver at{x, Vec3(0, 0, 1), p % 2 ? 0.02 : 0.0};
+        LightSelector::Memo memo;
+        std::vector<double> pmf(lights.size());
+        double total = 0;
+        for (std::uint32_t l = 0; l < lights.size(); ++l) {
+            total += pmf[l] = s.pmf(at, l, &memo);
+            // The tree never leaves out a light that reaches x.
+            if (unoccluded_irradiance(lights[l], x, at.n) > 0) {
+                INFO("point " << p << " light " << l);
+                CHECK(pmf[l] > 0);
+            }
+        }
+        INFO("point " << p);
+        CHECK(total == Approx(1.0).epsilon(1e-12));
+        if (p % 10 == 0) {
+            // 200k draws at kAlpha, as above.
+            CHECK(draws_pvalue(s, at, pmf, 200000, rng) > testing::kAlpha);
+            ++checked_draws;
+        }
+    }
+    CHECK(checked_draws == 4);
 }
