@@ -348,6 +348,7 @@ struct PointLighting::Impl {
         std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.type == LightType::Triangle; });
     std::vector<std::uint32_t> clipped_;  // integrand_to_blocker's lights
+    std::vector<std::uint32_t> merged_;   // ... from the closest hit's traversal
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -742,8 +743,19 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     const Vec3 origin = offset_ray_origin(x, ng, w);
     const double offset = length(origin - x);
     ++counters.rays;
-    const std::optional<RayHit> blocker = p_.scene.geometry().closest_hit(
-        origin, w, 0, std::numeric_limits<double>::infinity());
+    // The closest hit and, in one traversal, the lights along w: all of
+    // them where nothing but emitters lies along w (`complete`), as a
+    // light among emissive triangles is mostly seen or hidden by another.
+    // Traced from the offset origin, as the closest hit: a light crossing
+    // w between x and it (one touching x) is found only by lights_along().
+    const GeometryScene& geometry = p_.scene.geometry();
+    bool complete = false;
+    std::optional<RayHit> blocker;
+    merged_.clear();
+    if (geometry.has_emitter_candidates())
+        blocker = geometry.closest_hit_and_emitters(origin, w, merged_, complete);
+    else
+        blocker = geometry.closest_hit(origin, w, 0, std::numeric_limits<double>::infinity());
     // integrand()'s rule: whether the blocker hides a light at `distance`
     // from x (a triangle is not hidden by itself, nor by a coplanar
     // neighbour at its depth).
@@ -758,8 +770,20 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     // mesh's near side): the integrand is not 0, and its densities need
     // every light along w anyway — list them all at once.
     const std::vector<std::uint32_t>* along = &clipped_;
-    if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
-        p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
+    if (complete) {
+        // Every light along w: what lights_along(x, w) lists, kept for the
+        // densities (technique_pdf) as it would keep its own.
+        std::sort(merged_.begin(), merged_.end());
+        merged_.erase(std::unique(merged_.begin(), merged_.end()), merged_.end());
+        if (!std::binary_search(merged_.begin(), merged_.end(), drawn)) merged_.push_back(drawn);
+        along_.x = x;
+        along_.w = w;
+        along_.valid = true;
+        ++along_serial_;
+        along_.lights.swap(merged_);
+        along = &along_.lights;
+    } else if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
+               p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
         along = &lights_along(x, w);
     } else {
         // Hidden: no light past the blocker is seen, at most

@@ -59,7 +59,6 @@ const Receiver& Scene::mesh_receiver(std::uint32_t mesh) const {
 
 void Scene::commit() {
     if (committed_) return;
-    geometry_.commit();
     analytic_lights_ = lights_.size();
 
     double r2 = 1.0;
@@ -94,6 +93,7 @@ void Scene::commit() {
         lights_.push_back(light);
     }
     build_emitter_shapes();
+    geometry_.commit();  // with the emitter candidates (build_emitter_shapes)
     committed_ = true;
 }
 
@@ -123,6 +123,12 @@ void Scene::build_emitter_shapes() {
             default: unshaped_lights_.push_back(id);
         }
     }
+    // Light samples among emissive triangles trace the candidates with the
+    // meshes (direct_lighting.cpp: integrand_to_blocker).
+    if (std::any_of(geometry_.meshes().begin(), geometry_.meshes().end(),
+                    [](const Mesh& m) { return m.is_emissive(); }))
+        geometry_.set_emitter_candidates(emitter_shapes_.enlarged_vertices(),
+                                         emitter_shapes_.light_of());
     emitter_shapes_.commit();
 }
 

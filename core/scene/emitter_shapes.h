@@ -30,6 +30,10 @@ public:
     // Builds the Embree scene; required before lights_along.
     void commit();
     bool empty() const { return light_of_.empty(); }
+    // The enlarged triangles (9 floats each) and their lights, until commit():
+    // what GeometryScene::set_emitter_candidates takes.
+    const std::vector<float>& enlarged_vertices() const { return vertices_; }
+    const std::vector<std::uint32_t>& light_of() const { return light_of_; }
 
     // Appends to `out`, without repeats and in no order, every light whose
     // (enlarged) shape the ray origin + t·direction, t ∈ [0, tmax], crosses —

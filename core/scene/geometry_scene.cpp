@@ -1,6 +1,8 @@
 #include "scene/geometry_scene.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -33,6 +35,52 @@ float float_up(double x) {
     return f;
 }
 
+// Embree geometry masks: meshes, and the emitter candidates that only
+// closest_hit_and_emitters traces.
+constexpr unsigned kMeshMask = 1, kCandidateMask = 2;
+
+// An intersection context that closest_hit_and_emitters extends: the filter of
+// emissive meshes and candidates acts only where `emitters` is set.
+struct EmitterQuery {
+    const std::uint32_t* light_of = nullptr;
+    std::uint32_t candidates = ~0u;  // their geometry id
+    std::vector<std::uint32_t>* lights = nullptr;
+    // The closest hit on an emissive mesh so far (rejected, so that the
+    // traversal goes on to the lights behind it).
+    float t = INFINITY, u = 0, v = 0;
+    std::uint32_t mesh = ~0u, triangle = 0;
+};
+struct QueryContext {
+    RTCIntersectContext context;  // first: Embree hands filters this pointer
+    EmitterQuery* emitters = nullptr;
+};
+
+// Intersect filter of emissive meshes and of the candidates: a candidate is
+// listed and passed over; an emissive mesh's hit is kept aside as the
+// closest so far and passed over too. Other queries accept every hit.
+void emitter_filter(const RTCFilterFunctionNArguments* args) {
+    EmitterQuery* q = reinterpret_cast<const QueryContext*>(args->context)->emitters;
+    if (!q) return;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        args->valid[i] = 0;
+        const unsigned geometry = RTCHitN_geomID(args->hit, args->N, i);
+        const unsigned primitive = RTCHitN_primID(args->hit, args->N, i);
+        if (geometry == q->candidates) {
+            q->lights->push_back(q->light_of[primitive]);
+            continue;
+        }
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        if (t < q->t) {
+            q->t = t;
+            q->u = RTCHitN_u(args->hit, args->N, i);
+            q->v = RTCHitN_v(args->hit, args->N, i);
+            q->mesh = geometry;
+            q->triangle = primitive;
+        }
+    }
+}
+
 // Fills an Embree ray; false when the interval is empty (nothing to trace).
 bool make_ray(const Vec3& o, const Vec3& d, double tmin, double tmax, RTCRay& ray) {
     const double lo = tmin > 0.0 ? tmin : 0.0;  // Embree needs tnear >= 0
@@ -42,7 +90,7 @@ bool make_ray(const Vec3& o, const Vec3& d, double tmin, double tmax, RTCRay& ra
     ray.tnear = float_up(lo);
     ray.tfar = float_down(tmax);
     ray.time = 0.0f;
-    ray.mask = 0xFFFFFFFFu;
+    ray.mask = kMeshMask;
     ray.id = 0;
     ray.flags = 0;
     return ray.tfar >= ray.tnear;
@@ -243,6 +291,11 @@ std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
         m.emission = in.emission;
     const std::size_t good = measure_triangles(m);
 
+    if (has_emitter_candidates()) {  // their id is the next mesh's
+        rtcDetachGeometry(scene_, candidates_geometry_);
+        candidates_geometry_ = ~0u;
+        candidate_light_of_.clear();
+    }
     attach_to_embree(m, id, fail.who);
     meshes_.push_back(std::move(m));
     occluder_triangles_ += good;
@@ -273,6 +326,8 @@ void GeometryScene::attach_to_embree(const Mesh& m, std::uint32_t id,
     for (std::size_t t = 0; t < T; ++t)
         for (int k = 0; k < 3; ++k) ib[3 * t + k] = m.triangles[t][k];
     rtcSetGeometryBuildQuality(geom, options_.build_quality);
+    rtcSetGeometryMask(geom, kMeshMask);
+    if (m.is_emissive()) rtcSetGeometryIntersectFilterFunction(geom, emitter_filter);
     rtcCommitGeometry(geom);
     rtcAttachGeometryByID(scene_, geom, id);
     rtcReleaseGeometry(geom);
@@ -333,9 +388,9 @@ bool GeometryScene::occluded(const Vec3& origin, const Vec3& direction, double t
     if (!has_occluders()) return false;
     RTCRay ray;
     if (!make_ray(origin, direction, tmin, tmax, ray)) return false;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    rtcOccluded1(scene_, &ctx, &ray);
+    QueryContext ctx;
+    rtcInitIntersectContext(&ctx.context);
+    rtcOccluded1(scene_, &ctx.context, &ray);
     count_rays(1);
     return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }
@@ -355,9 +410,9 @@ std::optional<RayHit> GeometryScene::closest_hit(const Vec3& origin, const Vec3&
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    rtcIntersect1(scene_, &ctx, &rh);
+    QueryContext ctx;  // the emissive meshes' filter reads it
+    rtcInitIntersectContext(&ctx.context);
+    rtcIntersect1(scene_, &ctx.context, &rh);
     count_rays(1);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     if (embree_normal) *embree_normal = Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
@@ -398,8 +453,8 @@ void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) cons
     constexpr std::size_t kChunk = 256;
     RTCRay buf[kChunk];
     std::size_t where[kChunk];
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
+    QueryContext ctx;
+    rtcInitIntersectContext(&ctx.context);
     for (std::size_t start = 0; start < count; start += kChunk) {
         const std::size_t end = std::min(count, start + kChunk);
         unsigned n = 0;
@@ -409,10 +464,90 @@ void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) cons
             if (make_ray(r.origin, r.direction, r.tmin, r.tmax, buf[n])) where[n++] = i;
         }
         if (n == 0) continue;
-        rtcOccluded1M(scene_, &ctx, buf, n, sizeof(RTCRay));
+        rtcOccluded1M(scene_, &ctx.context, buf, n, sizeof(RTCRay));
         count_rays(n);
         for (unsigned k = 0; k < n; ++k) out[where[k]] = buf[k].tfar < 0.0f;
     }
+}
+
+void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
+                                           std::vector<std::uint32_t> light_of) {
+    if (has_emitter_candidates()) {
+        rtcDetachGeometry(scene_, candidates_geometry_);
+        candidates_geometry_ = ~0u;
+        candidate_light_of_.clear();
+    }
+    committed_ = false;
+    const std::size_t triangles = light_of.size();
+    if (triangles == 0 || vertices.size() != 9 * triangles) return;
+    RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * triangles));
+    auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), triangles));
+    if (!vb || !ib) {
+        rtcReleaseGeometry(geom);
+        device_->check();
+        throw std::runtime_error("emitter candidates: Embree could not allocate buffers");
+    }
+    std::copy(vertices.begin(), vertices.end(), vb);
+    for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
+    rtcSetGeometryBuildQuality(geom, options_.build_quality);
+    rtcSetGeometryMask(geom, kCandidateMask);
+    rtcSetGeometryIntersectFilterFunction(geom, emitter_filter);
+    rtcCommitGeometry(geom);
+    const auto id = std::uint32_t(meshes_.size());
+    rtcAttachGeometryByID(scene_, geom, id);
+    rtcReleaseGeometry(geom);
+    device_->check();
+    candidates_geometry_ = id;
+    candidate_light_of_ = std::move(light_of);
+}
+
+std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
+    const Vec3& origin, const Vec3& direction, std::vector<std::uint32_t>& lights,
+    bool& complete) const {
+    require_committed("closest_hit_and_emitters");
+    if (!has_emitter_candidates())
+        throw std::logic_error("GeometryScene::closest_hit_and_emitters: no emitter candidates");
+    complete = true;
+    RTCRayHit rh;
+    if (!make_ray(origin, direction, 0, std::numeric_limits<double>::infinity(), rh.ray))
+        return std::nullopt;
+    rh.ray.mask = kMeshMask | kCandidateMask;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    EmitterQuery q;
+    q.light_of = candidate_light_of_.data();
+    q.candidates = candidates_geometry_;
+    q.lights = &lights;
+    QueryContext ctx;
+    rtcInitIntersectContext(&ctx.context);
+    ctx.emitters = &q;
+    rtcIntersect1(scene_, &ctx.context, &rh);
+    count_rays(1);
+    RayHit hit;
+    // A hit Embree kept is on a mesh that does not emit: nothing past it
+    // was looked for.
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+        complete = false;
+        if (!(q.t < rh.ray.tfar)) {
+            hit.t = rh.ray.tfar;
+            hit.mesh = rh.hit.geomID;
+            hit.triangle = rh.hit.primID;
+            hit.b1 = rh.hit.u;
+            hit.b2 = rh.hit.v;
+            return hit;
+        }
+    }
+    if (q.mesh == ~0u) return std::nullopt;
+    hit.t = q.t;
+    hit.mesh = q.mesh;
+    hit.triangle = q.triangle;
+    hit.b1 = q.u;
+    hit.b2 = q.v;
+    return hit;
 }
 
 const Mesh& GeometryScene::mesh(std::uint32_t id) const {

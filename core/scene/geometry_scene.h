@@ -164,6 +164,23 @@ public:
     // occluded() for many rays at once (Embree's stream API); out[i] = occluded.
     void occluded(const Ray* rays, std::size_t count, bool* out) const;
 
+    // Emitter candidates (EmitterShapes' enlarged shapes: 9 floats and a
+    // light id per triangle) traced beside the meshes by
+    // closest_hit_and_emitters, so that a light sample's closest hit and the
+    // lights along its ray take one traversal. The other queries never see
+    // them. Set before commit(); add_mesh drops them.
+    void set_emitter_candidates(const std::vector<float>& vertices,
+                                std::vector<std::uint32_t> light_of);
+    bool has_emitter_candidates() const { return candidates_geometry_ != ~0u; }
+    // closest_hit(origin, direction, 0, ∞), and appended to `lights` (with
+    // repeats, in no order) every emitter candidate the ray crosses up to
+    // that hit — all along it where the hit is on an emissive mesh or there
+    // is none: `complete` then says so (the traversal goes on past emissive
+    // meshes, which are lights too). Requires has_emitter_candidates().
+    std::optional<RayHit> closest_hit_and_emitters(const Vec3& origin, const Vec3& direction,
+                                                   std::vector<std::uint32_t>& lights,
+                                                   bool& complete) const;
+
     // Rays handed to Embree since construction or the last reset, summed over
     // per-thread counters.
     std::uint64_t rays_traced() const;
@@ -191,6 +208,9 @@ private:
     RTCScene scene_ = nullptr;
     std::vector<Mesh> meshes_;
     std::size_t occluder_triangles_ = 0;
+    // The emitter candidates' Embree geometry id (~0u: none) and light ids.
+    std::uint32_t candidates_geometry_ = ~0u;
+    std::vector<std::uint32_t> candidate_light_of_;
     bool committed_ = false;
 
     // Per-thread ray counters: each thread adds to its own cache line.
