@@ -1337,16 +1337,18 @@ void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_f
 // Each light's draws then form a stratified prefix whatever its share — a
 // strip of one shared net is stratified only for dyadic shares, and a shape
 // taken from an unrelated dimension not at all. The draw's footprint
-// position comes from the same point of that sequence (dimensions 0–1 beside
-// the shape's 2–3), so a light's draws are stratified in position and light
-// point together, as with one light; taken from the technique's sequence,
-// positions were paired at random with shape points, which loses that in a
-// penumbra, where visibility depends on both: 2.1× less variance at 256
-// samples on a penumbra texel lit by two lights
-// (tests/core/test_footprint_strata.cpp). On the demo room's 128² floor,
-// relMSE at equal samples (32 seeds, ±7 % each) 0.95× at 16 spp and 0.97×
-// at 64; its 187 darkest-error texels, under the table, 1.40 → 1.29 × Cycles'
-// at 16 spp (issue 9). Unbiased: a light's sequence
+// position comes from the same point of that sequence: one 4-D Sobol' point
+// (ScrambledSobol::get_4d), the shape from dimensions 0–1 (a (0,2)-net), the
+// position from 2–3, all four a (3,m,4)-net, so a light's draws are
+// stratified in position and light point together. That matters in a
+// penumbra, where visibility depends on both. On a penumbra texel lit by two
+// lights (tests/core/test_footprint_strata.cpp), the variance at 256 samples
+// over one sample's: positions from the technique's sequence 1/680; from the
+// light's sequence as a second 2-D pair, shuffled apart (padding) 1/1400;
+// the 4-D point 1/4860. On the demo room's 128² floor (4.7 cm texels),
+// relMSE at 256 equal samples against Cycles' (3 seeds): 1.03 → 0.66, its
+// penumbrae (edge texels) 0.97 → 0.57; shared_image (1.6 cm texels) 0.99 →
+// 0.93 (issue 9; bench/results/error_sources.txt). Unbiased: a light's sequence
 // is independent of the selections, so its next point is uniform whatever
 // the count, in position as in shape. A later pass continues every count: the table is the same at
 // every pass, so the selections of earlier rounds are replayed (cheap: no
@@ -1393,8 +1395,12 @@ public:
                                      std::uint64_t(d.slot + 1);
             light_sequence.emplace(base_ ^ mix64(0x6a09e667f3bcc909ull ^ id));
         }
-        light_sequence->get_2d(taken_[at], 0, d.fu, d.fv);
-        light_sequence->get_2d(taken_[at]++, 2, d.u1, d.u2);
+        double u[4];
+        light_sequence->get_4d(taken_[at]++, 0, u);
+        d.u1 = u[0];
+        d.u2 = u[1];
+        d.fu = u[2];
+        d.fv = u[3];
         return d;
     }
 

@@ -32,17 +32,25 @@ std::uint32_t group_seed(std::uint64_t seed, std::uint32_t group, std::uint32_t 
 
 double to_unit(std::uint32_t x) { return x * 0x1.0p-32; }
 
-// Sobol' second dimension as a GF(2)-linear map, one 256-entry table per
-// byte of the index: four lookups instead of a loop over up to 32 bits (the
-// shuffled indices have high bits set).
-struct Dim1Tables {
+// A Sobol' dimension as a GF(2)-linear map, one 256-entry table per byte of
+// the index: four lookups instead of a loop over up to 32 bits (the shuffled
+// indices have high bits set). Direction numbers v_i = m_i · 2^(31−i) from the
+// primitive polynomial of degree s with inner coefficients a and initial m
+// (Joe & Kuo's new-joe-kuo-6.21201, dimensions 2–4):
+//   m_i = m_{i−s} ⊕ 2^s m_{i−s} ⊕ ⊕_{k=1}^{s−1} 2^k a_k m_{i−k}.
+struct SobolTables {
     std::uint32_t byte[4][256] = {};
-    constexpr Dim1Tables() {
-        // Direction numbers of primitive polynomial x + 1: v_0 = 2^31,
-        // v_i = v_{i-1} ^ (v_{i-1} >> 1).
+    constexpr SobolTables(int s, std::uint32_t a, std::uint32_t m0, std::uint32_t m1,
+                          std::uint32_t m2) {
+        std::uint32_t m[32] = {m0, m1, m2};
+        for (int i = s; i < 32; ++i) {
+            std::uint32_t next = m[i - s] ^ (m[i - s] << s);
+            for (int k = 1; k < s; ++k)
+                if (a >> (s - 1 - k) & 1) next ^= m[i - k] << k;
+            m[i] = next;
+        }
         std::uint32_t v[32] = {};
-        v[0] = 0x80000000u;
-        for (int i = 1; i < 32; ++i) v[i] = v[i - 1] ^ (v[i - 1] >> 1);
+        for (int i = 0; i < 32; ++i) v[i] = m[i] << (31 - i);
         for (int b = 0; b < 4; ++b)
             for (std::uint32_t x = 0; x < 256; ++x) {
                 std::uint32_t r = 0;
@@ -51,8 +59,15 @@ struct Dim1Tables {
                 byte[b][x] = r;
             }
     }
+    constexpr std::uint32_t operator()(std::uint32_t i) const {
+        return byte[0][i & 0xff] ^ byte[1][i >> 8 & 0xff] ^ byte[2][i >> 16 & 0xff] ^
+               byte[3][i >> 24];
+    }
 };
-constexpr Dim1Tables kDim1;  // built at compile time
+// Built at compile time: x + 1; x² + x + 1; x³ + x + 1.
+constexpr SobolTables kDim1(1, 0, 1, 0, 0);
+constexpr SobolTables kDim2(2, 1, 1, 3, 0);
+constexpr SobolTables kDim3(3, 1, 1, 3, 1);
 
 // owen_scramble(sobol_dim0(i), seed): the reversals cancel.
 std::uint32_t scrambled_dim0(std::uint32_t i, std::uint32_t seed) {
@@ -63,10 +78,9 @@ std::uint32_t scrambled_dim0(std::uint32_t i, std::uint32_t seed) {
 
 std::uint32_t sobol_dim0(std::uint32_t index) { return reverse_bits(index); }
 
-std::uint32_t sobol_dim1(std::uint32_t index) {
-    return kDim1.byte[0][index & 0xff] ^ kDim1.byte[1][index >> 8 & 0xff] ^
-           kDim1.byte[2][index >> 16 & 0xff] ^ kDim1.byte[3][index >> 24];
-}
+std::uint32_t sobol_dim1(std::uint32_t index) { return kDim1(index); }
+std::uint32_t sobol_dim2(std::uint32_t index) { return kDim2(index); }
+std::uint32_t sobol_dim3(std::uint32_t index) { return kDim3(index); }
 
 std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
     return reverse_bits(laine_karras(reverse_bits(x), seed));
@@ -93,6 +107,14 @@ void ScrambledSobol::get_2d(std::uint32_t index, std::uint32_t group, double& u,
     const std::uint32_t i = owen_scramble(index, seed(group, 0));
     u = to_unit(scrambled_dim0(i, seed(group, 1)));
     v = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
+}
+
+void ScrambledSobol::get_4d(std::uint32_t index, std::uint32_t group, double out[4]) const {
+    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    out[0] = to_unit(scrambled_dim0(i, seed(group, 1)));
+    out[1] = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
+    out[2] = to_unit(owen_scramble(sobol_dim2(i), group_seed(seed_, group, 3)));
+    out[3] = to_unit(owen_scramble(sobol_dim3(i), group_seed(seed_, group, 4)));
 }
 
 }  // namespace omis

@@ -23,6 +23,12 @@ public:
     // Dimension group `group` (any small integer) of sample `index`.
     double get_1d(std::uint32_t index, std::uint32_t group) const;
     void get_2d(std::uint32_t index, std::uint32_t group, double& u, double& v) const;
+    // Four dimensions of one point of the Sobol' sequence (dimensions 0–3 at
+    // one shuffled index): out[0..1] are get_2d's (0,2)-net pair, out[2..3]
+    // stratified jointly with them — the pair that varies with the first
+    // (e.g. a footprint position beside a light point) is then not paired at
+    // random.
+    void get_4d(std::uint32_t index, std::uint32_t group, double out[4]) const;
 
 private:
     static constexpr std::uint32_t kCachedGroups = 4;
@@ -34,6 +40,8 @@ private:
 // The building blocks, exposed for tests.
 std::uint32_t sobol_dim0(std::uint32_t index);  // bit reversal (van der Corput)
 std::uint32_t sobol_dim1(std::uint32_t index);  // Sobol' second dimension
+std::uint32_t sobol_dim2(std::uint32_t index);  // third
+std::uint32_t sobol_dim3(std::uint32_t index);  // fourth
 // Nested uniform scramble of a 32-bit fixed-point coordinate (Owen): each bit
 // is flipped by a hash of the bits above it.
 std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed);

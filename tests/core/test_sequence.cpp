@@ -3,6 +3,7 @@
 // between dimension groups, unbiased integration.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -138,4 +139,86 @@ TEST_CASE("sequence: integration is unbiased and beats independent draws", "[seq
     const double exact = std::atan(1.0);
     CHECK(std::abs(mean - exact) < 4 * std::sqrt(var / runs));
     CHECK(var < 0.25 * exact * (1 - exact) / n);
+}
+
+namespace {
+
+// Every elementary box of volume 2^(t−m) in [0,1)^4 holds exactly 2^t of the
+// 2^m points (a (t,m,4)-net), for every split of m − t into four exponents.
+bool is_net_4d(const std::vector<std::array<double, 4>>& p, int m, int t) {
+    const int k = m - t;
+    for (int a = 0; a <= k; ++a)
+        for (int b = 0; a + b <= k; ++b)
+            for (int c = 0; a + b + c <= k; ++c) {
+                const int d = k - a - b - c;
+                std::vector<int> count(std::size_t(1) << k, 0);
+                for (const auto& x : p) {
+                    const std::size_t i0 = std::size_t(x[0] * double(1u << a));
+                    const std::size_t i1 = std::size_t(x[1] * double(1u << b));
+                    const std::size_t i2 = std::size_t(x[2] * double(1u << c));
+                    const std::size_t i3 = std::size_t(x[3] * double(1u << d));
+                    ++count[((i0 << b | i1) << c | i2) << d | i3];
+                }
+                for (int n : count)
+                    if (n != 1 << t) return false;
+            }
+    return true;
+}
+
+}  // namespace
+
+TEST_CASE("sequence: 4-D points are (3,m,4)-nets in every aligned block, their first pair a (0,2)-net",
+          "[sequence]") {
+    // Sobol' dimensions 0–3 (primitive polynomials of degrees 1, 1, 2, 3) form
+    // a (t,m,4)-net with t = Σ (degree − 1) = 3; the nested scrambles keep it.
+    // Unscrambled first: the direction numbers themselves.
+    for (int m = 3; m <= 9; ++m) {
+        std::vector<std::array<double, 4>> p;
+        for (std::uint32_t i = 0; i < (1u << m); ++i)
+            p.push_back({sobol_dim0(i) * 0x1.0p-32, sobol_dim1(i) * 0x1.0p-32,
+                         sobol_dim2(i) * 0x1.0p-32, sobol_dim3(i) * 0x1.0p-32});
+        INFO("unscrambled, m " << m);
+        CHECK(is_net_4d(p, m, 3));
+    }
+    for (std::uint64_t seed : {3ull, 99ull}) {
+        const ScrambledSobol s(seed);
+        for (int m : {4, 8})
+            for (std::uint32_t block : {0u, 1u, 5u}) {
+                const std::uint32_t n = 1u << m;
+                std::vector<std::array<double, 4>> p;
+                std::vector<double> u, v;
+                for (std::uint32_t i = block * n; i < (block + 1) * n; ++i) {
+                    std::array<double, 4> x;
+                    s.get_4d(i, 0, x.data());
+                    p.push_back(x);
+                    u.push_back(x[0]);
+                    v.push_back(x[1]);
+                }
+                INFO("seed " << seed << " m " << m << " block " << block);
+                CHECK(is_net_4d(p, m, 3));
+                CHECK(is_net(u, v, m));
+            }
+    }
+}
+
+TEST_CASE("sequence: 4-D points are uniform over randomizations", "[sequence]") {
+    // As for the pairs: 4096 seeds, 16 bins per coordinate, Binomial(4096,
+    // 1/16) counts (σ ≈ 15.5), 5σ per bin: a false failure over 16·4·3 bins
+    // below 1e-4.
+    const int seeds = 4096, bins = 16;
+    for (std::uint32_t index : {0u, 5u, 1000u}) {
+        std::vector<std::array<int, 4>> count(bins, {0, 0, 0, 0});
+        for (int k = 0; k < seeds; ++k) {
+            const ScrambledSobol s(std::uint64_t(k) * 2654435761ull + 5);
+            double x[4];
+            s.get_4d(index, 1, x);
+            for (int d = 0; d < 4; ++d) ++count[int(x[d] * bins)][d];
+        }
+        const double mean = double(seeds) / bins, sigma = std::sqrt(mean * (1 - 1.0 / bins));
+        for (int b = 0; b < bins; ++b)
+            for (int d = 0; d < 4; ++d) {
+                INFO("index " << index << " bin " << b << " dimension " << d);
+                CHECK(std::abs(count[b][d] - mean) < 5 * sigma);
+            }
+    }
 }
