@@ -192,11 +192,16 @@ struct PointLighting::Impl {
     bool add_unlit_sample(const Active& active, std::size_t a, int hidden_index,
                           double own_density, const Integrand& f, const Estimators* into,
                           int n_into);
-    // integrand() of a direction a light technique drew (a light lies along
-    // it), where every light casts shadows and none lacks a shape
-    // (clip_at_blocker_, below p_): the closest hit first; where it hides
-    // the drawn light (at drawn_distance from x), only the lights up to it,
-    // which are all that can be seen. The same value as integrand().
+    // integrand() where every light casts shadows (clip_at_blocker_, below
+    // p_), from the closest hit first: of a direction a light technique drew
+    // toward light `drawn` (at drawn_distance from x), or with drawn = ~0u of
+    // a BSDF direction. Where the blocker hides the drawn light (or, for a
+    // BSDF direction, where there is one), only the lights up to it are
+    // listed, which are all that can be seen; where nothing is hit and every
+    // shaped light is an emissive triangle of the geometry
+    // (shapes_in_geometry_), only the unshaped lights (and the drawn one).
+    // The same value as integrand(), but on the edges of light shapes
+    // (a set of directions of measure zero).
     Integrand integrand_to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
                                    std::uint32_t drawn, double drawn_distance);
     // Light l's own part of the integrand along w (visible from x or not).
@@ -342,11 +347,29 @@ struct PointLighting::Impl {
     // with analytic lights alone, integrand() often needs only an occlusion
     // ray, cheaper than a closest hit.
     const bool clip_at_blocker_ =
-        p_.settings.fast_paths && p_.plan.shadow_rays && p_.scene.unshaped_lights().empty() &&
+        p_.settings.fast_paths && p_.plan.shadow_rays &&
         std::all_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.cast_shadow; }) &&
         std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.type == LightType::Triangle; });
+    // BSDF directions too take integrand_to_blocker where a world lies along
+    // every one of them: integrand() then traces a ray for each anyway, after
+    // an all-hits query of the emitter shapes that the closest hit makes
+    // unneeded where it meets a surface that does not emit or, with
+    // shapes_in_geometry_, nothing.
+    const bool bsdf_to_blocker_ =
+        clip_at_blocker_ &&
+        std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
+                    [](const Light& l) { return l.type == LightType::World; });
+    // Every light with an emitter shape is an emissive triangle, which the
+    // geometry holds: a ray that meets no surface crosses no such shape.
+    const bool shapes_in_geometry_ = std::all_of(
+        p_.scene.lights().begin(), p_.scene.lights().end(), [&](const Light& l) {
+            return l.is_delta() || l.type == LightType::Triangle ||
+                   std::find(p_.scene.unshaped_lights().begin(), p_.scene.unshaped_lights().end(),
+                             std::uint32_t(&l - p_.scene.lights().data())) !=
+                       p_.scene.unshaped_lights().end();
+        });
     std::vector<std::uint32_t> clipped_;  // integrand_to_blocker's lights
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
@@ -757,9 +780,18 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     // The drawn light seen, or hidden by an emitting surface (a closed
     // mesh's near side): the integrand is not 0, and its densities need
     // every light along w anyway — list them all at once.
+    const bool drew_light = drawn != ~0u;
+    const auto& unshaped = p_.scene.unshaped_lights();
     const std::vector<std::uint32_t>* along = &clipped_;
-    if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
-        p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
+    if (!blocker && shapes_in_geometry_) {
+        // Nothing hit: no emissive triangle lies along w (but the drawn one,
+        // where single precision missed its edge), only the unshaped lights.
+        clipped_.assign(unshaped.begin(), unshaped.end());
+        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
+            clipped_.push_back(drawn);
+    } else if (drew_light ? !hidden(p_.scene.lights()[drawn], drawn_distance) ||
+                                p_.scene.geometry().mesh(blocker->mesh).is_emissive()
+                          : !blocker || p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
         along = &lights_along(x, w);
     } else {
         // Hidden: no light past the blocker is seen, at most
@@ -770,8 +802,11 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         const double scale = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), reach});
         clipped_.clear();
         p_.scene.emitter_shapes().lights_along(x, w, clipped_, reach * (1 + 1e-4) + 1e-5 * scale);
+        // Unshaped lights (a world, a sun's disk, a point light's) are listed
+        // by no shape: `hidden` below judges them by their distance.
+        clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
         // As lights_along(): the drawn light surely lies along w.
-        if (std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
+        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
             clipped_.push_back(drawn);
     }
     for (std::uint32_t l : *along) {
@@ -1121,6 +1156,8 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         light_f = integrand_to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
         if (add_unlit_sample(active, a, hidden_index, own_density, *light_f, into, n_into))
             return;
+    } else if (ok && t.bsdf && bsdf_to_blocker_) {
+        light_f = integrand_to_blocker(p.x, p.n, p.ng, w, ~0u, 0);
     }
     if (ok) {
         for (std::size_t b = 0; b < active.all.size(); ++b) {
