@@ -21,7 +21,7 @@ _SELECTIONS = (  # SPEC name, label, tooltip start
                            "contribution (fast with many lights)"),
     ("defensive", "Near or Any",
      "Half the time the lights that light this point most (ignoring shadows), half the "
-     "time any light (defensive mixture)"),
+     "time any light (defensive mixture; with a world, nine times in ten the former)"),
 )
 _SAMPLERS = (  # SPEC name, label, tooltip end
     ("area", "Area", "a point on the light's area"),

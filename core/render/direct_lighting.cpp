@@ -37,6 +37,9 @@ constexpr double kEmitterDepthTolerance = 1e-4;
 // and the two densities nearly agree there. A function of (x, light) only, so
 // pdf evaluation makes the same choice as sampling.
 constexpr double kTinySolidAngle = 1e-3;
+// `defensive` selection's uniform share where a world is among the lights
+// (mix_in_uniform); half otherwise.
+constexpr double kDefensiveShareWithWorld = 0.1;
 
 // Where a light's size is compared (its centroid) and its area / kTinySolidAngle
 // (infinite: never tiny), kept per light in the context: a compact record
@@ -192,11 +195,16 @@ struct PointLighting::Impl {
     bool add_unlit_sample(const Active& active, std::size_t a, int hidden_index,
                           double own_density, const Integrand& f, const Estimators* into,
                           int n_into);
-    // integrand() of a direction a light technique drew (a light lies along
-    // it), where every light casts shadows and none lacks a shape
-    // (clip_at_blocker_, below p_): the closest hit first; where it hides
-    // the drawn light (at drawn_distance from x), only the lights up to it,
-    // which are all that can be seen. The same value as integrand().
+    // integrand() where every light casts shadows (clip_at_blocker_, below
+    // p_), from the closest hit first: of a direction a light technique drew
+    // toward light `drawn` (at drawn_distance from x), or with drawn = ~0u of
+    // a BSDF direction. Where the blocker hides the drawn light (or, for a
+    // BSDF direction, where there is one), only the lights up to it are
+    // listed, which are all that can be seen; where nothing is hit and every
+    // shaped light is an emissive triangle of the geometry
+    // (shapes_in_geometry_), only the unshaped lights (and the drawn one).
+    // The same value as integrand(), but on the edges of light shapes
+    // (a set of directions of measure zero).
     Integrand integrand_to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
                                    std::uint32_t drawn, double drawn_distance);
     // Light l's own part of the integrand along w (visible from x or not).
@@ -342,13 +350,44 @@ struct PointLighting::Impl {
     // with analytic lights alone, integrand() often needs only an occlusion
     // ray, cheaper than a closest hit.
     const bool clip_at_blocker_ =
-        p_.settings.fast_paths && p_.plan.shadow_rays && p_.scene.unshaped_lights().empty() &&
+        p_.settings.fast_paths && p_.plan.shadow_rays &&
         std::all_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.cast_shadow; }) &&
         std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.type == LightType::Triangle; });
+    // BSDF directions too take integrand_to_blocker where a world lies along
+    // every one of them: integrand() then traces a ray for each anyway, after
+    // an all-hits query of the emitter shapes that the closest hit makes
+    // unneeded where it meets a surface that does not emit or, with
+    // shapes_in_geometry_, nothing.
+    const bool bsdf_to_blocker_ =
+        clip_at_blocker_ &&
+        std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
+                    [](const Light& l) { return l.type == LightType::World; });
+    // Every light with an emitter shape is an emissive triangle, which the
+    // geometry holds: a ray that meets no surface crosses no such shape.
+    const bool shapes_in_geometry_ = std::all_of(
+        p_.scene.lights().begin(), p_.scene.lights().end(), [&](const Light& l) {
+            return l.is_delta() || l.type == LightType::Triangle ||
+                   std::find(p_.scene.unshaped_lights().begin(), p_.scene.unshaped_lights().end(),
+                             std::uint32_t(&l - p_.scene.lights().data())) !=
+                       p_.scene.unshaped_lights().end();
+        });
     std::vector<std::uint32_t> clipped_;  // integrand_to_blocker's lights
     std::vector<std::uint32_t> merged_;   // ... from the closest hit's traversal
+    // Every light technique's table (if any) has weights that need no
+    // irradiance (`uniform`, `power`: only which lights reach the probes):
+    // active_for makes them again at every pass instead of keeping them in
+    // the texel tables, which costs three allocations per texel, their
+    // release at the end and a lookup per pass. Measured on the
+    // emission_world reproduction (omis module, 128², one thread, CPU per
+    // bake, best of 5 interleaved runs of 10): samples=2 42 → 34 ms;
+    // samples=64 unchanged within the noise (±10 %).
+    const bool cheap_tables_ = std::all_of(
+        p_.settings.techniques.begin(), p_.settings.techniques.end(), [](const Technique& t) {
+            return t.bsdf || t.selection == LightSelection::Uniform ||
+                   t.selection == LightSelection::Power;
+        });
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -570,15 +609,34 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes) {
 // the unoccluded weights undervalue — one shadowed where it is bright — keeps
 // a fair share of a single technique's samples. Lights reaching no probe keep
 // their tiny share (unbiased wherever the technique is active).
+// With a world among the lights, the uniform part is kDefensiveShareWithWorld
+// instead of half: the world is drawn by cosine over the whole hemisphere, and
+// its draws are the noisy ones wherever it is partly hidden (each finds it with
+// the probability of its visible cosine-weighted share: a skylight, a window),
+// while a lamp's solid-angle draws are nearly exact where it is seen; half
+// uniform gave the lamps as many draws as the world. Measured per sample
+// (omis-module reproductions of the race's scenes, 64², optimal, 8–16 seeds,
+// relMSE at 2/4/16/64/256 spp against a half): world_window (a skylit room,
+// world 29× the lamp's power) 1.04/1.03/0.80/0.75/0.64 (a quarter:
+// 0.91/0.92/0.85/0.83/0.78; none, i.e. `unoccluded`: 1.64/1.64/1.28/0.82/0.62,
+// as a light drawn a few percent of the time is missed by most texels' first
+// draws); emission_world with a world 10× as bright (then the main light, in
+// the open) 0.41/0.48/0.49 at 4/16/256 spp (`unoccluded` 0.28/0.38/0.39).
 void PointLighting::Impl::mix_in_uniform(int k) {
     LightChoice& c = choices_[k];
     const std::vector<char>& reaches = reaches_;
     int reaching = 0;
-    for (std::size_t i = 0; i < c.lights.size(); ++i) reaching += reaches[i];
+    bool world = false;
+    for (std::size_t i = 0; i < c.lights.size(); ++i) {
+        reaching += reaches[i];
+        world = world || p_.scene.lights()[c.lights[i]].type == LightType::World;
+    }
     if (reaching == 0) return;
+    const double uniform = world ? kDefensiveShareWithWorld : 0.5;
     double running = 0;
     for (std::size_t i = 0; i < c.lights.size(); ++i) {
-        c.probability[i] = 0.5 * c.probability[i] + (reaches[i] ? 0.5 / reaching : 0.0);
+        c.probability[i] =
+            (1 - uniform) * c.probability[i] + (reaches[i] ? uniform / reaching : 0.0);
         running += c.probability[i];
         c.cdf[i] = running;
     }
@@ -769,21 +827,33 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     // The drawn light seen, or hidden by an emitting surface (a closed
     // mesh's near side): the integrand is not 0, and its densities need
     // every light along w anyway — list them all at once.
+    const bool drew_light = drawn != ~0u;
+    const auto& unshaped = p_.scene.unshaped_lights();
     const std::vector<std::uint32_t>* along = &clipped_;
     if (complete) {
-        // Every light along w: what lights_along(x, w) lists, kept for the
-        // densities (technique_pdf) as it would keep its own.
+        // Every light along w: what lights_along(x, w) lists (the shapes the
+        // traversal crossed, the unshaped lights, the drawn light), kept for
+        // the densities (technique_pdf) as it would keep its own.
         std::sort(merged_.begin(), merged_.end());
         merged_.erase(std::unique(merged_.begin(), merged_.end()), merged_.end());
-        if (!std::binary_search(merged_.begin(), merged_.end(), drawn)) merged_.push_back(drawn);
+        merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
+        if (drew_light && std::find(merged_.begin(), merged_.end(), drawn) == merged_.end())
+            merged_.push_back(drawn);
         along_.x = x;
         along_.w = w;
         along_.valid = true;
         ++along_serial_;
         along_.lights.swap(merged_);
         along = &along_.lights;
-    } else if (!hidden(p_.scene.lights()[drawn], drawn_distance) ||
-               p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
+    } else if (!blocker && shapes_in_geometry_) {
+        // Nothing hit: no emissive triangle lies along w (but the drawn one,
+        // where single precision missed its edge), only the unshaped lights.
+        clipped_.assign(unshaped.begin(), unshaped.end());
+        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
+            clipped_.push_back(drawn);
+    } else if (drew_light ? !hidden(p_.scene.lights()[drawn], drawn_distance) ||
+                                p_.scene.geometry().mesh(blocker->mesh).is_emissive()
+                          : !blocker || p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
         along = &lights_along(x, w);
     } else {
         // Hidden: no light past the blocker is seen, at most
@@ -794,8 +864,11 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         const double scale = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), reach});
         clipped_.clear();
         p_.scene.emitter_shapes().lights_along(x, w, clipped_, reach * (1 + 1e-4) + 1e-5 * scale);
+        // Unshaped lights (a world, a sun's disk, a point light's) are listed
+        // by no shape: `hidden` below judges them by their distance.
+        clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
         // As lights_along(): the drawn light surely lies along w.
-        if (std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
+        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
             clipped_.push_back(drawn);
     }
     for (std::uint32_t l : *along) {
@@ -974,6 +1047,7 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     Probes probes(centre, footprint);
     set_region(probes);
     TexelTables& kept = p_.texel_tables;
+    keep = keep && !cheap_tables_;
     if (keep)
         if (const TexelTables::Entry* entry = kept.find(stream)) {
             restore(*entry, active);
@@ -1145,6 +1219,8 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         light_f = integrand_to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
         if (add_unlit_sample(active, a, hidden_index, own_density, *light_f, into, n_into))
             return;
+    } else if (ok && t.bsdf && bsdf_to_blocker_) {
+        light_f = integrand_to_blocker(p.x, p.n, p.ng, w, ~0u, 0);
     }
     if (ok) {
         for (std::size_t b = 0; b < active.all.size(); ++b) {

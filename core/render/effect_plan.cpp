@@ -264,7 +264,9 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // occlusion hides from the unoccluded weights keep their share
         // (`unoccluded` alone starved the demo room's floor under its table).
         // One sequence of N samples instead of a pair's two of N/2: see
-        // bench_cycles' error per sample (README, issue 9).
+        // bench_cycles' error per sample (README, issue 9). With a world in
+        // the selection the uniform part is a tenth, not half (its cosine
+        // draws are the noisy ones: direct_lighting.cpp, mix_in_uniform).
         add("defensive/solid-angle", 1);
     }
     // The world left to `bsdf`; huge lights are what cosine sampling is good

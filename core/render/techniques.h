@@ -16,6 +16,8 @@ namespace omis {
 // half uniform over the lights that reach the point (a defensive mixture,
 // Hesterberg 1995): one technique that keeps shadowed lights sampled, where
 // an unoccluded + uniform pair would split the samples over two sequences.
+// With a world among the lights, a tenth uniform (direct_lighting.cpp,
+// mix_in_uniform: the world's cosine draws are the noisy ones).
 enum class LightSelection { Uniform, Power, Unoccluded, Tree, Defensive };
 
 struct Technique {

@@ -7,7 +7,8 @@
 // weighted irradiance at up to five probes) cost more than a one-round pass's
 // samples. A table kept is the one recomputation would give, bit for bit.
 // Texels whose light techniques all draw from selectors keep nothing (cheap
-// to work out again).
+// to work out again), nor do bakes whose tables need no irradiance (`uniform`,
+// `power`: direct_lighting.cpp, cheap_tables_).
 //
 // Shared by the threads of one lighting job: a texel is shaded by one thread
 // at a time, and entries are only added, never changed or removed. Memory is

@@ -91,6 +91,46 @@ TEST_CASE("defensive selection alone and with bsdf matches the exact answer", "[
     }
 }
 
+// A receiver under a ceiling with a skylight, lit by a world (the main light:
+// drawn by cosine, its uniform share a tenth) and a small lamp under the
+// ceiling: world_window in small. Exact: the world through the opening and
+// past the ceiling's far edges, and the lamp (analytic lights occlude nothing).
+TEST_CASE("defensive selection with a world through a skylight matches the exact answer",
+          "[direct]") {
+    const Vec3 x(0, 0, 0), n(0, 0, 1);
+    const double Lw = 1.0, L = 5.0, z = 1.0, far = 50.0;
+    const double x0 = 0.2, x1 = 0.6, y0 = -0.2, y1 = 0.2;  // the opening
+    Scene scene;
+    scene.add_light(make_world_light(Vec3(Lw, Lw, Lw)));
+    const Vec3 lamp(-0.8, -0.15, 0.9);
+    scene.add_light(make_rect_light(lamp, Vec3(0, 0.3, 0), Vec3(0.3, 0, 0), Vec3(L, L, L), false,
+                                    kPi));
+    // The ceiling around the opening: four rectangles.
+    const std::vector<std::vector<Vec3>> ceiling = {
+        rect({-far, -far, z}, {x0 + far, 0, 0}, {0, 2 * far, 0}),
+        rect({x1, -far, z}, {far - x1, 0, 0}, {0, 2 * far, 0}),
+        rect({x0, -far, z}, {x1 - x0, 0, 0}, {0, y0 + far, 0}),
+        rect({x0, y1, z}, {x1 - x0, 0, 0}, {0, far - y1, 0})};
+    for (const auto& r : ceiling) scene.add_mesh(r, {{0, 1, 2}, {0, 2, 3}});
+    scene.commit();
+    const double sky = kPi - polygon_irradiance(x, n, rect({-far, -far, z}, {2 * far, 0, 0},
+                                                           {0, 2 * far, 0})) +
+                       polygon_irradiance(x, n, rect({x0, y0, z}, {x1 - x0, 0, 0}, {0, y1 - y0, 0}));
+    const double exact =
+        (Lw * sky + L * polygon_irradiance(x, n, rect(lamp, {0.3, 0, 0}, {0, 0.3, 0}))) / kPi;
+    const std::pair<std::vector<std::string>, std::vector<int>> cases[] = {
+        {{"defensive/solid-angle"}, {8}}, {{"defensive/solid-angle", "bsdf"}, {4, 4}}};
+    std::uint64_t seed = 23;
+    for (const auto& [names, samples] : cases)
+        for (Strategy strategy : {Strategy::Balance, Strategy::OptimalDirect}) {
+            const testing::PointCopies e =
+                light_copies(scene, x, n, names, samples, strategy, seed++);
+            INFO(names.size() << " technique(s), " << strategy_name(strategy) << ": " << e.mean
+                              << " ± " << e.standard_error << ", exact " << exact);
+            CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error);
+        }
+}
+
 TEST_CASE("the effect plan samples a few lights with one defensive technique", "[direct]") {
     const ShadowedPair s;
     std::vector<Technique> techniques;

@@ -96,6 +96,52 @@ TEST_CASE("emitter fast paths give the general path's estimates", "[direct][fast
     }
 }
 
+// With a world (issue 9): every light's draw, and every BSDF direction,
+// takes the closest hit first; lights without a shape (the world, a point
+// light's disk) are judged by their distance to the blocker, and where nothing
+// is hit and every shaped light is an emissive triangle, no emitter query is
+// made. The same estimates as the general path.
+TEST_CASE("emitter fast paths with a world give the general path's estimates",
+          "[direct][fast_paths]") {
+    // 0: emissive triangles, an occluder and a world (emission_world in
+    // small); 1: the same and a point light of radius 5 cm (unshaped, local)
+    // under the plate's edge; 2: the same and a square lamp (a shape not in
+    // the geometry).
+    for (int variant = 0; variant < 3; ++variant) {
+        Scene scene;
+        add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 8, 16);
+        scene.add_mesh(
+            std::vector<Vec3>{{0.3, -1, 0.4}, {1, -1, 0.4}, {1, 1, 0.4}, {0.3, 1, 0.4}},
+            {{0, 1, 2}, {0, 2, 3}});
+        scene.add_light(make_world_light(Vec3(0.3, 0.4, 0.5)));
+        if (variant >= 1) scene.add_light(make_point_light(Vec3(0.5, 0.2, 0.3), Vec3(2, 2, 2), 0.05));
+        if (variant >= 2)
+            scene.add_light(make_rect_light(Vec3(-0.15, -0.15, 1.8), Vec3(0, 0.3, 0),
+                                            Vec3(0.3, 0, 0), Vec3(20, 20, 20), false, kPi));
+        scene.commit();
+        const std::vector<std::string> names[] = {
+            {"uniform/solid-angle", "bsdf"}, {"defensive/solid-angle"},
+            {"defensive/solid-angle", "bsdf"}, {"tree/solid-angle", "bsdf"}};
+        for (const auto& techniques : names)
+            for (Strategy strategy : {Strategy::Balance, Strategy::OptimalDirect}) {
+                const std::vector<int> samples(techniques.size(), 4);
+                const DirectLightingSettings settings =
+                    testing::lighting_settings(techniques, samples, 4, strategy, 11);
+                const Bake fast = bake(scene, settings, true), general = bake(scene, settings, false);
+                INFO("variant " << variant << ", " << techniques.front() << " and "
+                                << techniques.size() - 1 << " more, " << strategy_name(strategy));
+                REQUIRE(fast.value.size() == general.value.size());
+                // As above: only the order of a direction's lights may differ.
+                for (std::size_t i = 0; i < fast.value.size(); ++i) {
+                    INFO("value " << i << ": " << fast.value[i] << " vs " << general.value[i]);
+                    CHECK(std::abs(fast.value[i] - general.value[i]) <=
+                          1e-12 * std::max(1.0, std::abs(general.value[i])));
+                }
+                CHECK(fast.stats.samples == general.stats.samples);
+            }
+    }
+}
+
 TEST_CASE("emitter shapes: lights_along stops at tmax", "[scene][emitter_shapes]") {
     EmitterShapes shapes;
     // Two unit squares across the z axis, at z = 1 (light 4) and z = 3 (light 9).

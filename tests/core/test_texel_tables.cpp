@@ -71,6 +71,32 @@ TEST_CASE("texel tables: a later pass from kept tables equals one that works the
     }
 }
 
+TEST_CASE("texel tables: tables that need no irradiance are made again, not kept",
+          "[texel_tables]") {
+    // `uniform` and `power` tables hold only which lights reach the probes:
+    // cheaper to make at every pass than to keep (direct_lighting.cpp,
+    // cheap_tables_). A later pass still equals one that works them out, and
+    // with an `unoccluded` technique beside them the tables are kept.
+    Scene scene;
+    add_spread_scene(scene);
+    const SquareFootprint f(Vec3(-0.3, 0.9, 0), 0.05);
+    for (const char* light : {"uniform/solid-angle", "power/area", "unoccluded/solid-angle"}) {
+        DirectLightingSettings s;
+        for (const char* name : {light, "bsdf"}) s.techniques.push_back(*parse_technique(name));
+        s.samples = {1, 1};
+        s.seed = 5;
+        LightingContext kept(scene, s), fresh(scene, s);
+        PointLighting passes(kept), once(fresh);
+        double first[3], later[3], direct[3];
+        passes.shade(0, 0, 1, f.centre(), &f, first, nullptr);
+        passes.shade(0, 1, 4, f.centre(), &f, later, nullptr);
+        once.shade(0, 1, 4, f.centre(), &f, direct, nullptr);
+        INFO(light);
+        CHECK(same_bits(later, direct));
+        CHECK(kept.texel_tables.size() == (std::strcmp(light, "unoccluded/solid-angle") == 0 ? 1u : 0u));
+    }
+}
+
 TEST_CASE("texel tables: set-up timing counts the kept tables' set-up, only while on",
           "[texel_tables]") {
     Scene scene;
