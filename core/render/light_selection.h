@@ -153,7 +153,15 @@ private:
         Bounds bounds;
         std::uint32_t light;
     };
-    std::uint32_t build(std::vector<Entry>& entries, std::size_t begin, std::size_t end,
+    // A light's sort key along one axis (twice its centre), beside its entry.
+    struct Keyed {
+        double key;
+        std::uint32_t entry;
+    };
+    // Builds the subtree of order[begin, end) (indices into entries) and
+    // leaves those in leaf order; `keys` is scratch of order's size.
+    std::uint32_t build(const std::vector<Entry>& entries, std::vector<std::uint32_t>& order,
+                        std::vector<Keyed>& keys, std::size_t begin, std::size_t end,
                         int depth);
     // Up to four children (two levels of the binary tree) side by side: a
     // step down reads one contiguous block and evaluates four independent
