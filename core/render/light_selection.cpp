@@ -283,6 +283,7 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
     }
     if (kind_ == Kind::Tree) {
         std::vector<Entry> entries;
+        entries.reserve(ids_.size());
         for (std::uint32_t id : ids_) {
             const auto b = bounds_of(lights[id], scene_radius);
             if (!b) {
@@ -293,14 +294,24 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
             // Lights of zero power add nothing and are never drawn.
         }
         if (!entries.empty()) {
-            build(entries, 0, entries.size(), 0);
-            // build() left the entries in leaf order.
+            // A binary tree of L leaves has 2L − 1 nodes: reserved, so that
+            // no growth copies them.
+            nodes_.reserve(2 * entries.size() - 1);
+            build_bounds_.reserve(2 * entries.size() - 1);
+            std::vector<Keyed> keys(entries.size());
+            for (std::uint32_t i = 0; i < keys.size(); ++i)
+                keys[i] = {entries[i].bounds.lo + entries[i].bounds.hi, i};
+            build(entries, keys, 0, entries.size(), 0);
+            // build() left `keys` in leaf order.
+            order_light_.reserve(entries.size());
+            order_cdf_.reserve(entries.size() + 1);
             order_cdf_.assign(1, 0.0);
             clusters_ = true;
             for (std::size_t i = 0; i < entries.size(); ++i) {
-                order_light_.push_back(entries[i].light);
-                per_light_[entries[i].light].position = std::uint32_t(i);
-                order_cdf_.push_back(order_cdf_.back() + entries[i].bounds.power);
+                const Entry& e = entries[keys[i].entry];
+                order_light_.push_back(e.light);
+                per_light_[e.light].position = std::uint32_t(i);
+                order_cdf_.push_back(order_cdf_.back() + e.bounds.power);
                 clusters_ = clusters_ && order_cdf_[i + 1] > order_cdf_[i];
             }
             root_ = nodes_[0].bounds;
@@ -314,8 +325,8 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
 // Depth first, the first child right after its parent. Splits at the median
 // centroid along the widest axis of the centroids: a balanced tree of depth
 // ⌈log2 L⌉; the triangles of one mesh stay together in their own subtrees.
-std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begin,
-                                   std::size_t end, int depth) {
+std::uint32_t LightSelector::build(const std::vector<Entry>& entries, std::vector<Keyed>& keys,
+                                   std::size_t begin, std::size_t end, int depth) {
     if (depth >= 64) throw std::length_error("light tree: deeper than 64 levels");
     const std::uint32_t index = std::uint32_t(nodes_.size());
     nodes_.emplace_back();
@@ -323,27 +334,31 @@ std::uint32_t LightSelector::build(std::vector<Entry>& entries, std::size_t begi
     nodes_[index].first = std::uint32_t(begin);
     nodes_[index].end = std::uint32_t(end);
     if (end - begin == 1) {
-        build_bounds_[index] = entries[begin].bounds;
-        nodes_[index].bounds = PackedBounds(entries[begin].bounds);
-        nodes_[index].light = entries[begin].light;
+        const Entry& leaf = entries[keys[begin].entry];
+        build_bounds_[index] = leaf.bounds;
+        nodes_[index].bounds = PackedBounds(leaf.bounds);
+        nodes_[index].light = leaf.light;
         return index;
     }
-    Vec3 lo = (entries[begin].bounds.lo + entries[begin].bounds.hi) * 0.5, hi = lo;
+    Vec3 lo = keys[begin].twice_centre * 0.5, hi = lo;
     for (std::size_t i = begin; i < end; ++i) {
-        const Vec3 c = (entries[i].bounds.lo + entries[i].bounds.hi) * 0.5;
+        const Vec3 c = keys[i].twice_centre * 0.5;
         lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
         hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
     }
     const Vec3 extent = hi - lo;
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
     const std::size_t mid = begin + (end - begin) / 2;
-    std::nth_element(entries.begin() + begin, entries.begin() + mid, entries.begin() + end,
-                     [axis](const Entry& a, const Entry& b) {
-                         return a.bounds.lo[axis] + a.bounds.hi[axis] <
-                                b.bounds.lo[axis] + b.bounds.hi[axis];
+    // The median along the axis, selected among the small keys rather than
+    // the entries: nth_element's steps depend only on the comparisons, the
+    // same lo + hi as the entries', so the tree is the one selecting the
+    // entries would give.
+    std::nth_element(keys.begin() + begin, keys.begin() + mid, keys.begin() + end,
+                     [axis](const Keyed& a, const Keyed& b) {
+                         return a.twice_centre[axis] < b.twice_centre[axis];
                      });
-    const std::uint32_t first = build(entries, begin, mid, depth + 1);
-    const std::uint32_t second = build(entries, mid, end, depth + 1);
+    const std::uint32_t first = build(entries, keys, begin, mid, depth + 1);
+    const std::uint32_t second = build(entries, keys, mid, end, depth + 1);
     nodes_[index].second_child = second;
     Bounds& b = build_bounds_[index];
     b = merge(build_bounds_[first], build_bounds_[second]);

@@ -153,8 +153,16 @@ private:
         Bounds bounds;
         std::uint32_t light;
     };
-    std::uint32_t build(std::vector<Entry>& entries, std::size_t begin, std::size_t end,
-                        int depth);
+    // An entry's box centre, doubled (lo + hi: the sort key along each
+    // axis), beside its index: the build reorders these 32-byte records in
+    // place of the 150-byte entries.
+    struct Keyed {
+        Vec3 twice_centre;
+        std::uint32_t entry;
+    };
+    // Builds the subtree of keys[begin, end) and leaves them in leaf order.
+    std::uint32_t build(const std::vector<Entry>& entries, std::vector<Keyed>& keys,
+                        std::size_t begin, std::size_t end, int depth);
     // Up to four children (two levels of the binary tree) side by side: a
     // step down reads one contiguous block and evaluates four independent
     // importances, and a draw among 100k lights takes 9 steps instead of 17.

@@ -85,7 +85,9 @@ void Scene::commit() {
     bounding_radius_ = std::sqrt(r2);
 
     // Emissive meshes emit from both sides, as Cycles' Emission shader does.
-    for (const EmissiveTriangle& t : geometry_.emissive_triangles()) {
+    const std::vector<EmissiveTriangle> emissive = geometry_.emissive_triangles();
+    lights_.reserve(lights_.size() + emissive.size());  // Lights are large: no growth copies
+    for (const EmissiveTriangle& t : emissive) {
         Light light = make_triangle_light(t.vertices[0], t.vertices[1], t.vertices[2],
                                           t.radiance, /*two_sided=*/true);
         light.mesh = t.mesh;

@@ -559,6 +559,10 @@ const Mesh& GeometryScene::mesh(std::uint32_t id) const {
 
 std::vector<EmissiveTriangle> GeometryScene::emissive_triangles() const {
     std::vector<EmissiveTriangle> out;
+    std::size_t most = 0;  // degenerate ones included
+    for (const Mesh& m : meshes_)
+        if (m.is_emissive()) most += m.num_triangles();
+    out.reserve(most);
     for (std::uint32_t id = 0; id < meshes_.size(); ++id) {
         const Mesh& m = meshes_[id];
         if (!m.is_emissive()) continue;
