@@ -36,7 +36,6 @@ panel per scene) and DIR/table.txt.
 
 import argparse
 import csv
-import importlib.util
 import os
 import sys
 import time
@@ -53,26 +52,12 @@ from omis_bake.job import BakeJob  # noqa: E402
 from omis_bake.settings import TECHNIQUE_NAME, settings_from  # noqa: E402
 
 
-def _load_demo():
-    spec = importlib.util.spec_from_file_location(
-        "blender_demo", os.path.join(ROOT, "scripts", "blender_demo.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def scene_demo(size):
-    demo = _load_demo()
-    floor, _ = demo.build_demo(size)
-    return [floor]
-
-
 # Every scene of the agreement suite (new ones are picked up as they are
 # appended), except those where omis and Cycles differ by design.
 EXCLUDED = {"spot_radius"}  # spot cone per disk point: see cycles_scenes.scene_spot_radius
 SCENES = {name: builder for name, builder in cycles_scenes.SCENES.items()
           if name not in EXCLUDED}
-SCENES["demo_room"] = scene_demo
+SCENES["demo_room"] = U.demo_room
 
 STRATEGIES = ("cycles", "omis balance", "omis optimal")
 TECHNIQUES_OVERRIDE = None  # set by --techniques
@@ -113,15 +98,6 @@ def omis_run(objects, image, strategy, seed, seconds=0.0, samples=1 << 30):
     for unit in job.units:
         mask |= unit.mask > 0.5
     return grey(image), wall, stats, mask
-
-
-def interior(mask):
-    m = mask.copy()
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            m &= np.roll(np.roll(mask, dy, 0), dx, 1)
-    m[0, :] = m[-1, :] = m[:, 0] = m[:, -1] = False
-    return m
 
 
 class Reference:
@@ -189,7 +165,7 @@ def run_scene(name, args):
 
     # omis' covered texels (the same UV islands Cycles bakes).
     _, _, stats0, cover = omis_run(objects, image, "balance", 1, samples=1)
-    mask = interior(cover)
+    mask = U.interior_texels(cover)
     plan = [line.strip() for line in (stats0["plan"] or "").splitlines()
             if line.strip().startswith(("+ ", "- "))]
     log(f"  plan: {'; '.join(plan) or '-'}; {int(mask.sum())} interior covered texels")

@@ -25,7 +25,6 @@ log2 ratio).
 """
 
 import argparse
-import importlib.util
 import os
 import sys
 
@@ -41,17 +40,8 @@ from omis_bake.job import BakeJob  # noqa: E402
 from omis_bake.settings import settings_from  # noqa: E402
 
 
-def scene_demo(size):
-    spec = importlib.util.spec_from_file_location(
-        "blender_demo", os.path.join(ROOT, "scripts", "blender_demo.py"))
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    floor, _ = module.build_demo(size)
-    return [floor]
-
-
 SCENES = dict(cycles_scenes.SCENES)
-SCENES["demo_room"] = scene_demo
+SCENES["demo_room"] = U.demo_room
 
 
 def grey(image):
@@ -83,16 +73,6 @@ def omis_bake(objects, image, spp, seed, balance=False):
     return grey(image), mask, stats
 
 
-def shrink(mask):
-    """The texels whose 8 neighbours are in mask too (and not on the image's rim)."""
-    m = mask.copy()
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            m &= np.roll(np.roll(mask, dy, 0), dx, 1)
-    m[0, :] = m[-1, :] = m[:, 0] = m[:, -1] = False
-    return m
-
-
 def regions(reference, inside):
     mean = reference[inside].mean()
     gy, gx = np.gradient(reference)
@@ -103,7 +83,7 @@ def regions(reference, inside):
         "dim": inside & (reference >= 0.05 * mean) & ~lit,
         "edge": inside & lit & (gradient > 0.05),
         "smooth": inside & lit & (gradient <= 0.05),
-        "border": inside & ~shrink(inside),
+        "border": inside & ~U.interior_texels(inside),
     }
 
 
@@ -141,7 +121,7 @@ def run_scene(name, args, lines):
     bpy.context.view_layer.update()
     (image,) = cycles_scenes.images_of(objects)
     _, cover, stats = omis_bake(objects, image, 1, 1, balance=True)
-    inside = shrink(cover)
+    inside = U.interior_texels(cover)
     ca = cycles_bake(objects, image, args.ref_spp, 1001)
     cb = cycles_bake(objects, image, args.ref_spp, 1002)
     oa, _, _ = omis_bake(objects, image, args.ref_spp, 2001, balance=True)

@@ -1,5 +1,8 @@
 #include "scene/device.h"
 
+#include <algorithm>
+#include <cstdint>
+
 namespace omis {
 
 const char* Device::error_name(RTCError code) {
@@ -64,6 +67,24 @@ void Device::check() const {
         has_error_.store(false, std::memory_order_release);
     }
     throw EmbreeError(code, std::string("Embree error ") + error_name(code) + ": " + message);
+}
+
+RTCGeometry new_triangle_soup(const Device& device, const std::vector<float>& vertices,
+                              const std::string& who) {
+    const std::size_t triangles = vertices.size() / 9;
+    RTCGeometry geom = rtcNewGeometry(device.handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
+    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * triangles));
+    auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), triangles));
+    if (!vb || !ib) {
+        rtcReleaseGeometry(geom);
+        device.check();
+        throw std::runtime_error(who + ": Embree could not allocate buffers");
+    }
+    std::copy(vertices.begin(), vertices.begin() + 9 * triangles, vb);
+    for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
+    return geom;
 }
 
 }  // namespace omis

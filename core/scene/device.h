@@ -10,6 +10,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace omis {
 
@@ -55,5 +56,11 @@ private:
     mutable RTCError code_ = RTC_ERROR_NONE;
     mutable std::string message_;
 };
+
+// A new (uncommitted) Embree geometry of unindexed triangles, three vertices
+// of three floats each in `vertices`; throws naming `who` where Embree cannot
+// allocate the buffers.
+RTCGeometry new_triangle_soup(const Device& device, const std::vector<float>& vertices,
+                              const std::string& who);
 
 }  // namespace omis

@@ -55,19 +55,7 @@ void EmitterShapes::commit() {
     scene_ = rtcNewScene(device_->handle());
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
-    const std::size_t triangles = light_of_.size();
-    RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * triangles));
-    auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), triangles));
-    if (!vb || !ib) {
-        rtcReleaseGeometry(geom);
-        device_->check();
-        throw std::runtime_error("emitter shapes: Embree could not allocate buffers");
-    }
-    std::copy(vertices_.begin(), vertices_.end(), vb);
-    for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
+    RTCGeometry geom = new_triangle_soup(*device_, vertices_, "emitter shapes");
     rtcSetGeometryOccludedFilterFunction(geom, collect);
     // Static shapes queried by every sample: spatial splits pay back.
     rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_HIGH);

@@ -81,6 +81,17 @@ void emitter_filter(const RTCFilterFunctionNArguments* args) {
     }
 }
 
+// The hit Embree kept.
+RayHit hit_of(const RTCRayHit& rh) {
+    RayHit hit;
+    hit.t = rh.ray.tfar;
+    hit.mesh = rh.hit.geomID;
+    hit.triangle = rh.hit.primID;
+    hit.b1 = rh.hit.u;
+    hit.b2 = rh.hit.v;
+    return hit;
+}
+
 // Fills an Embree ray; false when the interval is empty (nothing to trace).
 bool make_ray(const Vec3& o, const Vec3& d, double tmin, double tmax, RTCRay& ray) {
     const double lo = tmin > 0.0 ? tmin : 0.0;  // Embree needs tnear >= 0
@@ -416,13 +427,7 @@ std::optional<RayHit> GeometryScene::closest_hit(const Vec3& origin, const Vec3&
     count_rays(1);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     if (embree_normal) *embree_normal = Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
-    RayHit hit;
-    hit.t = rh.ray.tfar;
-    hit.mesh = rh.hit.geomID;
-    hit.triangle = rh.hit.primID;
-    hit.b1 = rh.hit.u;
-    hit.b2 = rh.hit.v;
-    return hit;
+    return hit_of(rh);
 }
 
 std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& direction,
@@ -480,18 +485,7 @@ void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
     committed_ = false;
     const std::size_t triangles = light_of.size();
     if (triangles == 0 || vertices.size() != 9 * triangles) return;
-    RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), 3 * triangles));
-    auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), triangles));
-    if (!vb || !ib) {
-        rtcReleaseGeometry(geom);
-        device_->check();
-        throw std::runtime_error("emitter candidates: Embree could not allocate buffers");
-    }
-    std::copy(vertices.begin(), vertices.end(), vb);
-    for (std::uint32_t i = 0; i < 3 * triangles; ++i) ib[i] = i;
+    RTCGeometry geom = new_triangle_soup(*device_, vertices, "emitter candidates");
     rtcSetGeometryBuildQuality(geom, options_.build_quality);
     rtcSetGeometryMask(geom, kCandidateMask);
     rtcSetGeometryIntersectFilterFunction(geom, emitter_filter);
@@ -527,21 +521,14 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     ctx.emitters = &q;
     rtcIntersect1(scene_, &ctx.context, &rh);
     count_rays(1);
-    RayHit hit;
     // A hit Embree kept is on a mesh that does not emit: nothing past it
     // was looked for.
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
         complete = false;
-        if (!(q.t < rh.ray.tfar)) {
-            hit.t = rh.ray.tfar;
-            hit.mesh = rh.hit.geomID;
-            hit.triangle = rh.hit.primID;
-            hit.b1 = rh.hit.u;
-            hit.b2 = rh.hit.v;
-            return hit;
-        }
+        if (!(q.t < rh.ray.tfar)) return hit_of(rh);
     }
     if (q.mesh == ~0u) return std::nullopt;
+    RayHit hit;  // the closest emissive hit, set aside by the filter
     hit.t = q.t;
     hit.mesh = q.mesh;
     hit.triangle = q.triangle;

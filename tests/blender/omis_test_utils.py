@@ -1,6 +1,8 @@
 """Helpers shared by the headless Blender tests (run through scripts/blender_run.sh)."""
 
+import importlib.util
 import math
+import os
 import sys
 import tempfile
 import time
@@ -281,3 +283,26 @@ class FakeLayout:
     def __setattr__(self, name, value):
         if name == "log":
             object.__setattr__(self, name, value)
+
+
+def interior_texels(mask):
+    """The texels of `mask` whose 8 neighbours are in it too (and not on the
+    image's rim): the benches compare these, away from the bake's margins."""
+    m = mask.copy()
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            m &= np.roll(np.roll(mask, dy, 0), dx, 1)
+    m[0, :] = m[-1, :] = m[:, 0] = m[:, -1] = False
+    return m
+
+
+def demo_room(size):
+    """The demo room of scripts/blender_demo.py, built into the current scene;
+    returns the objects to bake (its floor)."""
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+    spec = importlib.util.spec_from_file_location(
+        "blender_demo", os.path.join(root, "scripts", "blender_demo.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    floor, _ = module.build_demo(size)
+    return [floor]

@@ -55,6 +55,19 @@ Bake bake(const Scene& scene, DirectLightingSettings settings, bool fast_paths) 
     return b;
 }
 
+// The same samples and integrand values: only the order in which a
+// direction's lights are summed may differ, a few units of the last digit
+// (1e-12 relative is ~5000 ulps).
+void check_same_estimates(const Bake& fast, const Bake& general) {
+    REQUIRE(fast.value.size() == general.value.size());
+    for (std::size_t i = 0; i < fast.value.size(); ++i) {
+        INFO("value " << i << ": " << fast.value[i] << " vs " << general.value[i]);
+        CHECK(std::abs(fast.value[i] - general.value[i]) <=
+              1e-12 * std::max(1.0, std::abs(general.value[i])));
+    }
+    CHECK(fast.stats.samples == general.stats.samples);
+}
+
 }  // namespace
 
 TEST_CASE("emitter fast paths give the general path's estimates", "[direct][fast_paths]") {
@@ -78,16 +91,7 @@ TEST_CASE("emitter fast paths give the general path's estimates", "[direct][fast
             testing::lighting_settings(c.techniques, c.samples, 4, c.strategy, 7);
         const Bake fast = bake(scene, settings, true), general = bake(scene, settings, false);
         INFO(c.techniques.size() << " techniques, " << strategy_name(c.strategy));
-        REQUIRE(fast.value.size() == general.value.size());
-        // The same samples and integrand values: only the order in which a
-        // direction's lights are summed may differ, a few units of the last
-        // digit (1e-12 relative is ~5000 ulps).
-        for (std::size_t i = 0; i < fast.value.size(); ++i) {
-            INFO("value " << i << ": " << fast.value[i] << " vs " << general.value[i]);
-            CHECK(std::abs(fast.value[i] - general.value[i]) <=
-                  1e-12 * std::max(1.0, std::abs(general.value[i])));
-        }
-        CHECK(fast.stats.samples == general.stats.samples);
+        check_same_estimates(fast, general);
         // Some receiver sees a hidden lamp: its samples skip the densities.
         if (c.skips)
             CHECK(fast.stats.pdf_evaluations < general.stats.pdf_evaluations);
@@ -130,14 +134,7 @@ TEST_CASE("emitter fast paths with a world give the general path's estimates",
                 const Bake fast = bake(scene, settings, true), general = bake(scene, settings, false);
                 INFO("variant " << variant << ", " << techniques.front() << " and "
                                 << techniques.size() - 1 << " more, " << strategy_name(strategy));
-                REQUIRE(fast.value.size() == general.value.size());
-                // As above: only the order of a direction's lights may differ.
-                for (std::size_t i = 0; i < fast.value.size(); ++i) {
-                    INFO("value " << i << ": " << fast.value[i] << " vs " << general.value[i]);
-                    CHECK(std::abs(fast.value[i] - general.value[i]) <=
-                          1e-12 * std::max(1.0, std::abs(general.value[i])));
-                }
-                CHECK(fast.stats.samples == general.stats.samples);
+                check_same_estimates(fast, general);
             }
     }
 }
