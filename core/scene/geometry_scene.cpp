@@ -302,11 +302,7 @@ std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
         m.emission = in.emission;
     const std::size_t good = measure_triangles(m);
 
-    if (has_emitter_candidates()) {  // their id is the next mesh's
-        rtcDetachGeometry(scene_, candidates_geometry_);
-        candidates_geometry_ = ~0u;
-        candidate_light_of_.clear();
-    }
+    drop_emitter_candidates();  // their id is the next mesh's
     attach_to_embree(m, id, fail.who);
     meshes_.push_back(std::move(m));
     occluder_triangles_ += good;
@@ -475,13 +471,16 @@ void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) cons
     }
 }
 
+void GeometryScene::drop_emitter_candidates() {
+    if (!has_emitter_candidates()) return;
+    rtcDetachGeometry(scene_, candidates_geometry_);
+    candidates_geometry_ = ~0u;
+    candidate_light_of_.clear();
+}
+
 void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
                                            std::vector<std::uint32_t> light_of) {
-    if (has_emitter_candidates()) {
-        rtcDetachGeometry(scene_, candidates_geometry_);
-        candidates_geometry_ = ~0u;
-        candidate_light_of_.clear();
-    }
+    drop_emitter_candidates();
     committed_ = false;
     const std::size_t triangles = light_of.size();
     if (triangles == 0 || vertices.size() != 9 * triangles) return;

@@ -211,6 +211,7 @@ private:
     // The emitter candidates' Embree geometry id (~0u: none) and light ids.
     std::uint32_t candidates_geometry_ = ~0u;
     std::vector<std::uint32_t> candidate_light_of_;
+    void drop_emitter_candidates();  // detaches them, if any
     bool committed_ = false;
 
     // Per-thread ray counters: each thread adds to its own cache line.
