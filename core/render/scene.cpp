@@ -127,10 +127,26 @@ void Scene::build_emitter_shapes() {
     }
     // Light samples among emissive triangles trace the candidates with the
     // meshes (direct_lighting.cpp: integrand_to_blocker).
+    // An emissive mesh's triangles are their own candidates there (their
+    // hits name their lights): only the other shapes are added.
     if (std::any_of(geometry_.meshes().begin(), geometry_.meshes().end(),
-                    [](const Mesh& m) { return m.is_emissive(); }))
-        geometry_.set_emitter_candidates(emitter_shapes_.enlarged_vertices(),
-                                         emitter_shapes_.light_of());
+                    [](const Mesh& m) { return m.is_emissive(); })) {
+        const std::vector<float>& all = emitter_shapes_.enlarged_vertices();
+        const std::vector<std::uint32_t>& light_of = emitter_shapes_.light_of();
+        std::vector<float> vertices;
+        std::vector<std::uint32_t> candidate_light_of;
+        std::vector<GeometryScene::MeshTriangleLight> mesh_lights;
+        for (std::size_t i = 0; i < light_of.size(); ++i) {
+            const Light& l = lights_[light_of[i]];
+            if (l.mesh != ~0u) {
+                mesh_lights.push_back({l.mesh, l.mesh_triangle, light_of[i]});
+                continue;
+            }
+            vertices.insert(vertices.end(), all.begin() + 9 * i, all.begin() + 9 * (i + 1));
+            candidate_light_of.push_back(light_of[i]);
+        }
+        geometry_.set_emitter_candidates(vertices, std::move(candidate_light_of), mesh_lights);
+    }
     emitter_shapes_.commit();
 }
 

@@ -39,16 +39,32 @@ float float_up(double x) {
 // closest_hit_and_emitters traces.
 constexpr unsigned kMeshMask = 1, kCandidateMask = 2;
 
+// How near an edge (in barycentrics) an emissive triangle's hit makes
+// closest_hit_and_emitters' list incomplete. A ray that single precision
+// lets miss a triangle it crosses in exact arithmetic passes within float
+// rounding (~1e-7 of the coordinates) of that triangle's edge, and so of
+// its neighbour's, which it hits there. 1e-3 is the margin of the emitter
+// shapes' enlargement (EmitterShapes: 1e-3 about the centroid moves an edge
+// by 1e-3 of the centroid's distance to it, a third of the height) times
+// three: such a ray is left to EmitterShapes::lights_along.
+constexpr float kNearEdge = 1e-3f;
+
 // An intersection context that closest_hit_and_emitters extends: the filter of
 // emissive meshes and candidates acts only where `emitters` is set.
 struct EmitterQuery {
     const std::uint32_t* light_of = nullptr;
     std::uint32_t candidates = ~0u;  // their geometry id
+    // Emissive meshes' lights: mesh_light[mesh_light_start[mesh] + triangle].
+    const std::uint32_t* mesh_light = nullptr;
+    const std::uint32_t* mesh_light_start = nullptr;
     std::vector<std::uint32_t>* lights = nullptr;
     // The closest hit on an emissive mesh so far (rejected, so that the
     // traversal goes on to the lights behind it).
     float t = INFINITY, u = 0, v = 0;
     std::uint32_t mesh = ~0u, triangle = 0;
+    // Some emissive triangle was hit near its edge: a neighbour's light
+    // may be crossed where single precision says it is not.
+    bool near_edge = false;
 };
 struct QueryContext {
     RTCIntersectContext context;  // first: Embree hands filters this pointer
@@ -70,11 +86,17 @@ void emitter_filter(const RTCFilterFunctionNArguments* args) {
             q->lights->push_back(q->light_of[primitive]);
             continue;
         }
+        // An emissive mesh's triangle: its light is listed (it has no
+        // candidate: the hit is the triangle's own).
         const float t = RTCRayN_tfar(args->ray, args->N, i);
+        const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
+        const std::uint32_t light = q->mesh_light[q->mesh_light_start[geometry] + primitive];
+        if (light != ~0u) q->lights->push_back(light);
+        q->near_edge = q->near_edge || std::min({u, v, 1.0f - u - v}) < kNearEdge;
         if (t < q->t) {
             q->t = t;
-            q->u = RTCHitN_u(args->hit, args->N, i);
-            q->v = RTCHitN_v(args->hit, args->N, i);
+            q->u = u;
+            q->v = v;
             q->mesh = geometry;
             q->triangle = primitive;
         }
@@ -472,16 +494,37 @@ void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) cons
 }
 
 void GeometryScene::drop_emitter_candidates() {
-    if (!has_emitter_candidates()) return;
+    emitter_query_ = false;
+    mesh_light_.clear();
+    mesh_light_start_.clear();
+    if (candidates_geometry_ == ~0u) return;
     rtcDetachGeometry(scene_, candidates_geometry_);
     candidates_geometry_ = ~0u;
     candidate_light_of_.clear();
 }
 
 void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
-                                           std::vector<std::uint32_t> light_of) {
+                                           std::vector<std::uint32_t> light_of,
+                                           const std::vector<MeshTriangleLight>& mesh_lights) {
     drop_emitter_candidates();
     committed_ = false;
+    // Every emissive mesh's triangles, ~0u where a triangle has no light.
+    mesh_light_start_.assign(meshes_.size(), 0);
+    std::size_t emissive_triangles = 0;
+    for (std::size_t m = 0; m < meshes_.size(); ++m) {
+        mesh_light_start_[m] = std::uint32_t(emissive_triangles);
+        if (meshes_[m].is_emissive()) emissive_triangles += meshes_[m].num_triangles();
+    }
+    mesh_light_.assign(emissive_triangles, ~0u);
+    for (const MeshTriangleLight& l : mesh_lights) {
+        if (l.mesh >= meshes_.size() || !meshes_[l.mesh].is_emissive() ||
+            l.triangle >= meshes_[l.mesh].num_triangles())
+            throw std::invalid_argument("set_emitter_candidates: no emissive triangle " +
+                                        std::to_string(l.triangle) + " in mesh " +
+                                        std::to_string(l.mesh));
+        mesh_light_[mesh_light_start_[l.mesh] + l.triangle] = l.light;
+    }
+    emitter_query_ = true;
     const std::size_t triangles = light_of.size();
     if (triangles == 0 || vertices.size() != 9 * triangles) return;
     RTCGeometry geom = new_triangle_soup(*device_, vertices, "emitter candidates");
@@ -504,6 +547,8 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     if (!has_emitter_candidates())
         throw std::logic_error("GeometryScene::closest_hit_and_emitters: no emitter candidates");
     complete = true;
+    if (!has_occluders() && candidates_geometry_ == ~0u) return std::nullopt;
+    complete = true;
     RTCRayHit rh;
     if (!make_ray(origin, direction, 0, std::numeric_limits<double>::infinity(), rh.ray))
         return std::nullopt;
@@ -514,6 +559,8 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     EmitterQuery q;
     q.light_of = candidate_light_of_.data();
     q.candidates = candidates_geometry_;
+    q.mesh_light = mesh_light_.data();
+    q.mesh_light_start = mesh_light_start_.data();
     q.lights = &lights;
     QueryContext ctx;
     rtcInitIntersectContext(&ctx.context);
@@ -526,6 +573,7 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
         complete = false;
         if (!(q.t < rh.ray.tfar)) return hit_of(rh);
     }
+    complete = complete && !q.near_edge;
     if (q.mesh == ~0u) return std::nullopt;
     RayHit hit;  // the closest emissive hit, set aside by the filter
     hit.t = q.t;

@@ -168,15 +168,27 @@ public:
     // light id per triangle) traced beside the meshes by
     // closest_hit_and_emitters, so that a light sample's closest hit and the
     // lights along its ray take one traversal. The other queries never see
-    // them. Set before commit(); add_mesh drops them.
+    // them. The lights of emissive meshes' triangles need no candidate (one
+    // would double the triangles the traversal meets): `mesh_lights` names
+    // them, and their triangles' own hits list them. Set before commit();
+    // add_mesh drops them.
+    struct MeshTriangleLight {
+        std::uint32_t mesh = 0, triangle = 0, light = 0;
+    };
     void set_emitter_candidates(const std::vector<float>& vertices,
-                                std::vector<std::uint32_t> light_of);
-    bool has_emitter_candidates() const { return candidates_geometry_ != ~0u; }
+                                std::vector<std::uint32_t> light_of,
+                                const std::vector<MeshTriangleLight>& mesh_lights = {});
+    bool has_emitter_candidates() const { return emitter_query_; }
     // closest_hit(origin, direction, 0, ∞), and appended to `lights` (with
     // repeats, in no order) every emitter candidate the ray crosses up to
-    // that hit — all along it where the hit is on an emissive mesh or there
-    // is none: `complete` then says so (the traversal goes on past emissive
-    // meshes, which are lights too). Requires has_emitter_candidates().
+    // that hit and the lights of the emissive triangles it hits — all along
+    // it where the hit is on an emissive mesh or there is none, and no
+    // emissive triangle was hit near its edge: `complete` then says so (the
+    // traversal goes on past emissive meshes, which are lights too), and
+    // every light whose exact shape the ray crosses is listed (where
+    // single precision misses a triangle crossed near its edge, a
+    // neighbour's hit there leaves the list incomplete). Requires
+    // has_emitter_candidates().
     std::optional<RayHit> closest_hit_and_emitters(const Vec3& origin, const Vec3& direction,
                                                    std::vector<std::uint32_t>& lights,
                                                    bool& complete) const;
@@ -211,6 +223,9 @@ private:
     // The emitter candidates' Embree geometry id (~0u: none) and light ids.
     std::uint32_t candidates_geometry_ = ~0u;
     std::vector<std::uint32_t> candidate_light_of_;
+    // Emissive meshes' triangles' lights (~0u: none), from mesh_light_start_[mesh].
+    std::vector<std::uint32_t> mesh_light_, mesh_light_start_;
+    bool emitter_query_ = false;  // set_emitter_candidates was called
     void drop_emitter_candidates();  // detaches them, if any
     bool committed_ = false;
 
