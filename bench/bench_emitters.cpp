@@ -15,6 +15,10 @@
 // column is the growth against the smallest scene of the same family: the
 // target is at most 2× from 16 to 100k emitters.
 //
+// Also per scene: the estimates' variance per sample relative to their
+// squared mean ("relvar/s", the mean over receivers), and a hash of every
+// estimate's bits (a change that keeps the estimates bit-identical keeps it).
+//
 // Flags: --quick (fewer receivers), --only sphere|shadowed|point|area, --emitters N
 // (only the scenes of N emitters: for profiling one scene), --reps N
 // (repetitions, 5 unless given: more for a profile), --texels (each receiver
@@ -29,6 +33,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstdint>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -96,6 +101,11 @@ struct Timed {
     std::unique_ptr<PointLighting> shader;
     std::vector<Vec3> points;
     double commit_ms = 0, setup_ms = 0, best = 1e300;  // best: fastest shading of every receiver (s)
+    // Of the last shading: the mean over receivers of the value and of its
+    // variance (channel means), and a hash of every value's bits (estimates
+    // bit-identical across builds hash alike).
+    double mean_value = 0, mean_variance = 0;
+    std::uint64_t values_hash = 0;
 
     // A receiver's grid cell on the floor (--texels).
     struct Cell : Footprint {
@@ -133,10 +143,12 @@ struct Timed {
     }
 
     void shade_all() {
-        double value[3], variance[3];
+        std::vector<double> values(3 * points.size()), variances(3 * points.size());
         const Vec3 n(0, 0, 1);
         const double start = cpu_seconds();
         for (std::size_t i = 0; i < points.size(); ++i) {
+            double* value = &values[3 * i];
+            double* variance = &variances[3 * i];
             if (!texels) {
                 shader->shade(i, 0, settings.rounds, points[i], n, n, value, variance);
                 continue;
@@ -147,13 +159,33 @@ struct Timed {
             shader->shade(i, 0, settings.rounds, {points[i], n, n}, &footprint, value, variance);
         }
         best = std::min(best, cpu_seconds() - start);
+        mean_value = mean_variance = 0;
+        values_hash = 1469598103934665603ull;  // FNV-1a
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            mean_value += values[i] / double(values.size());
+            mean_variance += variances[i] / double(values.size());
+            std::uint64_t bits;
+            std::memcpy(&bits, &values[i], sizeof bits);
+            values_hash = (values_hash ^ bits) * 1099511628211ull;
+        }
+    }
+
+    int samples_per_point() const {
+        int per_point = 0;
+        for (int c : settings.samples) per_point += c * settings.rounds;
+        return per_point;
+    }
+    // The estimate's variance times its samples, over its squared mean: a
+    // per-sample relative variance, comparable across sample counts.
+    double relative_variance_per_sample() const {
+        return mean_value > 0 ? mean_variance * samples_per_point() / (mean_value * mean_value)
+                              : 0.0;
     }
 
     double us_per_sample() const {
         // Texel-samples per point: the MIS samples; in delta-only scenes, one
         // per round (a round draws one delta light, or loops over few).
-        int per_point = 0;
-        for (int c : settings.samples) per_point += c * settings.rounds;
+        int per_point = samples_per_point();
         if (per_point == 0) per_point = settings.rounds;
         return 1e6 * best / (double(points.size()) * per_point);
     }
@@ -230,8 +262,8 @@ int main(int argc, char** argv) {
     std::printf("time per texel-sample, one thread, %d receivers%s, %d rounds of the default "
                 "techniques\n", grid * grid, texels ? " (texels: samples over each cell)" : "",
                 rounds);
-    std::printf("%-16s %9s %12s %8s %9s %9s  %s\n", "scene", "emitters", "us/sample", "growth",
-                "commit ms", "setup ms", "techniques");
+    std::printf("%-16s %9s %12s %8s %9s %9s %9s %16s  %s\n", "scene", "emitters", "us/sample",
+                "growth", "commit ms", "setup ms", "relvar/s", "values hash", "techniques");
     double base = 0;
     std::string family;
     for (const auto& t : scenes) {
@@ -239,9 +271,10 @@ int main(int argc, char** argv) {
             family = t->family;
             base = t->us_per_sample();
         }
-        std::printf("%-16s %9d %12.3f %7.2fx %9.2f %9.2f  %s\n", t->family.c_str(), t->emitters,
-                    t->us_per_sample(), t->us_per_sample() / base, t->commit_ms, t->setup_ms,
-                    t->techniques.c_str());
+        std::printf("%-16s %9d %12.3f %7.2fx %9.2f %9.2f %9.4f %016llx  %s\n", t->family.c_str(),
+                    t->emitters, t->us_per_sample(), t->us_per_sample() / base, t->commit_ms,
+                    t->setup_ms, t->relative_variance_per_sample(),
+                    (unsigned long long)t->values_hash, t->techniques.c_str());
     }
     return 0;
 }
