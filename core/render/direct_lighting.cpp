@@ -210,6 +210,13 @@ struct PointLighting::Impl {
     // Light l's own part of the integrand along w (visible from x or not).
     Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
                               const Vec3& w);
+    // Starts reading the first two cache lines of light l's record, all that
+    // an emissive triangle's sample reads (light.h).
+    void prefetch_light(std::uint32_t l) const {
+        const char* record = reinterpret_cast<const char*>(&p_.scene.lights()[l]);
+        __builtin_prefetch(record);
+        __builtin_prefetch(record + 64);
+    }
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
     // choose_lights' per-point table for a whole footprint (its probes: the
@@ -810,9 +817,16 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     bool complete = false;
     std::optional<RayHit> blocker;
     merged_.clear();
-    if (geometry.has_emitter_candidates())
+    if (geometry.has_emitter_candidates()) {
         blocker = geometry.closest_hit_and_emitters(origin, w, merged_, complete);
-    else
+        // The lights found are read next (their radiance, then their
+        // shapes' densities and tree pmfs): among 100k lights each record is
+        // a cache miss, fetched here side by side instead of one after another.
+        for (std::uint32_t l : merged_) {
+            prefetch_light(l);
+            if (p_.tree_selector) p_.tree_selector->prefetch(l);
+        }
+    } else
         blocker = geometry.closest_hit(origin, w, 0, std::numeric_limits<double>::infinity());
     // integrand()'s rule: whether the blocker hides a light at `distance`
     // from x (a triangle is not hidden by itself, nor by a coplanar
