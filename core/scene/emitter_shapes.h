@@ -4,8 +4,9 @@
 // candidates: callers confirm each light exactly (emitted_radiance,
 // light_pdf), so a ray grazing an edge in single precision is never missed.
 // Kept apart from the occluder scene: lights do not occlude (SPEC §3). (A
-// copy also rides in the occluder scene under its own ray mask, for light
-// samples' single traversal: GeometryScene::closest_hit_and_emitters.)
+// copy of the shapes that are not emissive meshes' triangles also rides in
+// the occluder scene under its own ray mask, for light samples' single
+// traversal: GeometryScene::closest_hit_and_emitters.)
 #pragma once
 
 #include <embree3/rtcore.h>
