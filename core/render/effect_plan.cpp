@@ -309,6 +309,11 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // round. Emission_world reproduction (64², 4 seeds, CPU of one thread):
     // one per round, 64 samples relMSE 2.3e-4 in 0.21 s; two, 96 samples
     // 1.3e-4 in 0.30 s (before the split: 2.6e-4 in 0.21 s, 9.5e-5 in 0.5 s).
+    // The Cycles race (bench_cycles, emission_world, optimal ÷ Cycles at
+    // equal time, geometric mean, runs alternated on a loaded machine):
+    // before 0.99/1.17/1.19/0.82; one per round 0.74/0.87; two 0.41/0.91/
+    // 0.56/0.51. Per sample (--equal-samples, 4–128 spp) one per round is
+    // the better, 1.26 × Cycles' relMSE (before 1.48), two 1.74.
     const bool world_seen_through =
         world_to_bsdf && world_through_emitters(scene, true, scene.geometry().has_occluders());
     if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", world_seen_through ? 2 : 1);
