@@ -22,6 +22,15 @@ struct EffectPlan {
     // constant world to its BSDF rays: light techniques then draw only the
     // local emitters. When the world is a minor light (kMinorWorldPower).
     bool world_by_bsdf = false;
+    // The world left to `bsdf` is seen through emissive triangles (issue 9):
+    // the integrand along ω is split into the world's part, L_w wherever no
+    // surface that does not emit is hit first (estimated by `bsdf` alone), and
+    // the emitters' part, L_e − L_w on an emitter hit first (by MIS over all
+    // techniques). Their sum is the old integrand at every ω: unbiased. The
+    // world's cosine draws then see Bernoulli noise only from the surfaces
+    // that do not emit, and the light technique integrates the emitters'
+    // occlusion of the world. See world_through_emitters (effect_plan.cpp).
+    bool world_through_emitters = false;
     // Many delta lights: their sum is estimated by drawing delta_samples of
     // them per round from a light tree instead of one shadow ray each.
     bool sample_delta_lights = false;

@@ -1,0 +1,108 @@
+// A minor constant world among emissive triangles is seen through them
+// (EffectPlan::world_through_emitters, direct_lighting.cpp split_world,
+// split_parts): the world's part L_w wherever no surface that does not emit is
+// hit first, estimated by `bsdf` alone, and the emitters' part L_e − L_w, by
+// the light techniques alone. The two parts sum to the integrand at every
+// direction, so the estimate must stay that of E/π.
+//
+// As in test_own_light_estimates.cpp: T copies of one receiver in one call
+// are T independent estimates; their mean must lie within 4 standard errors
+// (measured from the copies) of the exact answer, a 6e-5 miss probability for
+// a normal mean; the seeds are fixed.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <vector>
+
+#include "render/direct_lighting.h"
+#include "render/effect_plan.h"
+#include "sampling/irradiance.h"
+#include "support/lighting_settings.h"
+#include "support/point_copies.h"
+
+using namespace omis;
+
+namespace {
+
+constexpr double kSigmas = 4.0;
+constexpr int kCopies = 64;
+
+using Quad = std::vector<Vec3>;
+// emission_world in small (tests/blender/cycles_scenes.py): a 0.6 m emissive
+// square 0.7 m up, and an opaque plate 0.35 m up beside it.
+const Quad kEmitter = {{-0.1, -0.3, 0.7}, {0.5, -0.3, 0.7}, {0.5, 0.3, 0.7}, {-0.1, 0.3, 0.7}};
+const Quad kPlate = {{-0.8, -0.3, 0.35}, {-0.3, -0.3, 0.35}, {-0.3, 0.3, 0.35}, {-0.8, 0.3, 0.35}};
+
+void build(Scene& scene, double emitter_radiance, double world_radiance) {
+    scene.add_mesh(kEmitter, {{0, 2, 1}, {0, 3, 2}}, Vec3(1, 1, 1) * emitter_radiance);
+    scene.add_mesh(kPlate, {{0, 1, 2}, {0, 2, 3}});
+    scene.add_light(make_world_light(Vec3(1, 1, 1) * world_radiance));
+    scene.commit();
+}
+
+// E/π at x (normal +z): the world where neither the emitter nor the plate
+// lies, the emitter where it does. From the points below, the plate and the
+// emitter do not overlap (they meet at most along an edge: measure zero).
+double exact(const Vec3& x, double emitter_radiance, double world_radiance) {
+    const Vec3 up(0, 0, 1);
+    const double emitter = polygon_irradiance(x, up, kEmitter) / kPi;
+    const double plate = polygon_irradiance(x, up, kPlate) / kPi;
+    return world_radiance * (1 - emitter - plate) + emitter_radiance * emitter;
+}
+
+}  // namespace
+
+TEST_CASE("a minor world seen through emissive triangles: the plan", "[direct][world]") {
+    Scene scene;
+    build(scene, 6.0, 0.2);
+    std::vector<Technique> techniques;
+    std::vector<int> samples;
+    default_techniques(scene, techniques, samples);
+    const EffectPlan plan = plan_effects(scene, techniques, samples);
+    CHECK(plan.world_by_bsdf);
+    CHECK(plan.world_through_emitters);
+    // Without `bsdf` the world is the light technique's, drawn as a light.
+    const std::vector<Technique> lights_only = {*parse_technique("uniform/solid-angle")};
+    CHECK_FALSE(plan_effects(scene, lights_only, {1}).world_through_emitters);
+}
+
+TEST_CASE("an emitter dimmer than the world is not seen through", "[direct][world]") {
+    // The emitters' part L_e − L_w would be negative: the plan keeps the
+    // world behind the emitter (where it stays a minor light).
+    Scene scene;
+    scene.add_mesh(kEmitter, {{0, 2, 1}, {0, 3, 2}}, Vec3(6, 6, 0.1));
+    scene.add_light(make_world_light(Vec3(0.2, 0.2, 0.2)));
+    scene.commit();
+    const std::vector<Technique> techniques = {*parse_technique("uniform/solid-angle"),
+                                               *parse_technique("bsdf")};
+    const EffectPlan plan = plan_effects(scene, techniques, {1, 1});
+    CHECK(plan.world_by_bsdf);
+    CHECK_FALSE(plan.world_through_emitters);
+}
+
+TEST_CASE("a minor world seen through emissive triangles: unbiased", "[direct][world]") {
+    const double emitter = 6.0, world = 0.2;
+    Scene scene;
+    build(scene, emitter, world);
+    const Vec3 up(0, 0, 1);
+    // Under the emitter; beside it (the plate hides part of the world); under
+    // the plate, next to the emitter's edge.
+    std::vector<Technique> techniques;
+    std::vector<int> samples;
+    default_techniques(scene, techniques, samples);
+    for (const Vec3& x : {Vec3(0.2, 0, 0), Vec3(0.6, 0.2, 0), Vec3(-0.5, 0, 0)}) {
+        for (Strategy s : {Strategy::Balance, Strategy::OptimalDirect}) {
+            DirectLightingSettings settings;
+            settings.techniques = techniques;
+            settings.samples = samples;
+            settings.rounds = 8;
+            settings.strategy = s;
+            settings.seed = 5;
+            const testing::PointCopies e =
+                testing::light_point_copies(scene, x, up, settings, kCopies);
+            INFO("x = (" << x.x << ", " << x.y << "), " << strategy_name(s));
+            CHECK(e.finite);
+            CHECK(std::abs(e.mean - exact(x, emitter, world)) <= kSigmas * e.standard_error);
+        }
+    }
+}
