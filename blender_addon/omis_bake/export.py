@@ -467,6 +467,7 @@ class _Exporter:
         self._receiver_cache = {}
         self._mesh_cache = {}      # this export's reads of shared meshes (instances)
         self.depsgraph = None
+        self._shared_used = set()  # mesh_cache keys this export read
         self._bake_local = {}     # object name -> _LocalMesh
         self._bake_slot_images = {}  # object name -> [ImageTarget or None] per slot
         self._attr_target = {}    # object name -> AttributeTarget
@@ -828,6 +829,7 @@ class _Exporter:
                       + (" …" if len(missing) > 8 else ""))
 
         self.add_world(context.scene.world)
+        mesh_cache.forget_unused(depsgraph, self._shared_used)
 
         has_light = bool(self.lights) or self.counts["emissive_meshes"] > 0
         if not has_light:
@@ -845,7 +847,7 @@ class _Exporter:
             return self._mesh_cache[key]
         if not cacheable:
             return _to_local_mesh(ob, baked=False)
-        local = mesh_cache.read(self.depsgraph, ob, _read_shared_mesh)
+        local = mesh_cache.read(self.depsgraph, ob, _read_shared_mesh, self._shared_used)
         self._mesh_cache[key] = local
         return local
 

@@ -40,11 +40,14 @@ def key_of(depsgraph, ob_eval):
             data.name_full if data is not None else "", data.as_pointer() if data else 0)
 
 
-def read(depsgraph, ob_eval, reader):
-    """reader(ob_eval), kept for the next bakes while the object is unchanged."""
+def read(depsgraph, ob_eval, reader, used=None):
+    """reader(ob_eval), kept for the next bakes while the object is unchanged;
+    the key joins `used` (see forget_unused)."""
     if not _installed:
         return reader(ob_eval)
     key = key_of(depsgraph, ob_eval)
+    if used is not None:
+        used.add(key)
     if key in _entries:
         stats["hits"] += 1
         return _entries[key]
@@ -52,6 +55,14 @@ def read(depsgraph, ob_eval, reader):
     local = reader(ob_eval)
     _entries[key] = local
     return local
+
+
+def forget_unused(depsgraph, used):
+    """Drops the view layer's entries an export did not read (objects deleted,
+    hidden or renamed): what is kept stays what the last bake used."""
+    layer = (depsgraph.scene.name_full, depsgraph.view_layer.name)
+    for key in [k for k in _entries if k[:2] == layer and k not in used]:
+        del _entries[key]
 
 
 def clear(*_args):
