@@ -17,7 +17,8 @@ and what the bake reached: samples per texel and passes (medians).
 --cpu times export, commit, convert and write by this thread's CPU time
 (they run on it; the machine is shared): convert then includes the waiting
 thread's own work during the native bakes.
---after-cycles N runs a Cycles bake of N samples before each (as the race does).
+--budgets -N bakes N samples per texel with no time limit (-1: the fixed
+cost and one round). --after-cycles N runs a Cycles bake of N samples before each (as the race does).
 """
 
 import os
@@ -70,7 +71,9 @@ def one_bake(objects, image, strategy, budget, seed, cycles_spp=0):
         U.cycles_bake(objects, cycles_spp, seed)
     U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
     U.select_only(objects)
-    overrides = {"samples": 1 << 30, "time_budget": float(budget), "margin": 0,
+    # A budget below 0 bakes -budget samples per texel with no time limit.
+    samples, seconds = (int(-budget), 0.0) if budget < 0 else (1 << 30, float(budget))
+    overrides = {"samples": samples, "time_budget": seconds, "margin": 0,
                  "seed": int(seed), "use_noise_target": False, "technique_mode": 'AUTO',
                  "use_clear": True}
     if strategy == "balance":
