@@ -18,7 +18,9 @@ and what the bake reached: samples per texel and passes (medians).
 (they run on it; the machine is shared): convert then includes the waiting
 thread's own work during the native bakes.
 --budgets -N bakes N samples per texel with no time limit (-1: the fixed
-cost and one round). --after-cycles N runs a Cycles bake of N samples before each (as the race does).
+cost and one round). --after-cycles N runs a Cycles bake of N samples before
+each, as the race does (its depsgraph updates drop mesh_cache's kept reads).
+The race itself bakes 128² (bench_cycles.py --size).
 """
 
 import os
