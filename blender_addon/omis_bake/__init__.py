@@ -24,12 +24,14 @@ bl_info = {
 
 if "bpy" in locals():  # F3 ▸ Reload Scripts
     import importlib
-    for _module in (errors, native, settings, export, writeback, job, operators, ui):  # noqa: F821
+    for _module in (errors, native, settings, mesh_cache, export, writeback, job,  # noqa: F821
+                    operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import errors, export, job, native, operators, settings, ui, writeback  # noqa: E402,F401
+from . import (errors, export, job, mesh_cache, native, operators, settings, ui,  # noqa: E402,F401
+               writeback)
 from .errors import BakeError, Cancelled  # noqa: E402,F401
 from .job import bake  # noqa: E402,F401
 
@@ -45,12 +47,14 @@ def register():
     for cls in _classes():
         bpy.utils.register_class(cls)
     bpy.types.Scene.omis = bpy.props.PointerProperty(type=settings.OMIS_PG_settings)
+    mesh_cache.install()
 
 
 def unregister():
     running = operators.running
     if running is not None:
         running.cancel()
+    mesh_cache.uninstall()
     del bpy.types.Scene.omis
     for cls in reversed(_classes()):
         bpy.utils.unregister_class(cls)

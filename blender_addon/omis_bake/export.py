@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import mesh_cache
 from .errors import BakeError
 from .scene_cache import RecordingScene
 
@@ -92,6 +93,7 @@ class _LocalMesh:
     uv: np.ndarray = None          # (L, 2) float32, active UV map, bake objects only
     loop_vertex: np.ndarray = None # (L,) int32, bake objects only
     n_loops: int = 0
+    placed: tuple = None           # (matrix bytes, positions) of a kept read's last placement
 
 
 def _read_mesh(me, baked):
@@ -133,6 +135,30 @@ def _read_mesh(me, baked):
     lv = np.empty(nl, np.int32)
     me.loops.foreach_get("vertex_index", lv)
     local.loop_vertex = lv
+    return local
+
+
+def _world_positions(local, matrix):
+    """local.co placed by matrix, float32; a kept read keeps its last placement
+    (read-only), so an unchanged object costs no transform and its array
+    compares by identity in scene_cache."""
+    key = matrix.tobytes()
+    kept = local.placed
+    if kept is not None and kept[0] == key:
+        return kept[1]
+    positions = (local.co @ matrix[:3, :3].T + matrix[:3, 3]).astype(np.float32)
+    if not local.co.flags.writeable:  # a read mesh_cache keeps
+        positions.flags.writeable = False
+        local.placed = (key, positions)
+    return positions
+
+
+def _read_shared_mesh(ob_eval):
+    """An occluder's or emitter's read, read-only: mesh_cache keeps it for later bakes."""
+    local = _to_local_mesh(ob_eval, baked=False)
+    if local is not None:
+        for array in (local.co, local.tri_vert, local.material_index):
+            array.flags.writeable = False
     return local
 
 
@@ -439,7 +465,9 @@ class _Exporter:
         self.images = {}          # image name_full -> ImageTarget
         self._emission_cache = {}
         self._receiver_cache = {}
-        self._mesh_cache = {}
+        self._mesh_cache = {}      # this export's reads of shared meshes (instances)
+        self.depsgraph = None
+        self._shared_used = set()  # mesh_cache keys this export read
         self._bake_local = {}     # object name -> _LocalMesh
         self._bake_slot_images = {}  # object name -> [ImageTarget or None] per slot
         self._attr_target = {}    # object name -> AttributeTarget
@@ -553,7 +581,7 @@ class _Exporter:
         det = float(np.linalg.det(A))
         if not math.isfinite(det) or abs(det) < 1e-30:
             return  # scaled to nothing
-        positions = (local.co @ A.T + M[:3, 3]).astype(np.float32)
+        positions = _world_positions(local, M)
         shaded = local.loop_normal is not None  # a baked object's own read
         normals = None
         if shaded:
@@ -744,7 +772,7 @@ class _Exporter:
 
     def run(self):
         context = self.context
-        depsgraph = context.evaluated_depsgraph_get()
+        depsgraph = self.depsgraph = context.evaluated_depsgraph_get()
         visible = _render_visible_names(context.view_layer)
         self.check_bake_objects(depsgraph, visible)
 
@@ -801,6 +829,7 @@ class _Exporter:
                       + (" …" if len(missing) > 8 else ""))
 
         self.add_world(context.scene.world)
+        mesh_cache.forget_unused(depsgraph, self._shared_used)
 
         has_light = bool(self.lights) or self.counts["emissive_meshes"] > 0
         if not has_light:
@@ -816,9 +845,10 @@ class _Exporter:
         key = (ob.original.name_full, ob.data.name_full if ob.data is not None else "")
         if cacheable and key in self._mesh_cache:
             return self._mesh_cache[key]
-        local = _to_local_mesh(ob, baked=False)
-        if cacheable:
-            self._mesh_cache[key] = local
+        if not cacheable:
+            return _to_local_mesh(ob, baked=False)
+        local = mesh_cache.read(self.depsgraph, ob, _read_shared_mesh, self._shared_used)
+        self._mesh_cache[key] = local
         return local
 
 

@@ -35,6 +35,8 @@ def _as_bytes(a):
 def same(a, b):
     """True when two call arguments are identical bit for bit (-0.0 is not 0.0)."""
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        if a is b and not a.flags.writeable:  # a kept read-only array (export.mesh_cache)
+            return True
         return (isinstance(a, np.ndarray) and isinstance(b, np.ndarray)
                 and a.dtype == b.dtype and a.shape == b.shape
                 and np.array_equal(_as_bytes(a), _as_bytes(b)))

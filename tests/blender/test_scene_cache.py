@@ -4,6 +4,11 @@ light's strength or place, a mesh's vertices, a modifier, an object hidden, an
 emissive material, the receiver's material, the world — the next bake commits
 anew and gives exactly what a bake without the kept scene gives.
 
+The same for the meshes kept between exports (omis_bake/mesh_cache.py): an
+unchanged occluder or emitter is not read again, and after a change that keeps
+its vertices (material indices) or one no depsgraph update reports (a shape
+key animated over a frame change) the bake equals one without kept reads.
+
     scripts/blender_run.sh tests/blender/test_scene_cache.py
 """
 
@@ -16,7 +21,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import omis_test_utils as U  # noqa: E402
 
-from omis_bake import scene_cache  # noqa: E402
+from omis_bake import mesh_cache, scene_cache  # noqa: E402
 from omis_bake.job import BakeJob  # noqa: E402
 from omis_bake.settings import settings_from  # noqa: E402
 
@@ -33,6 +38,17 @@ def build():
     glow = bpy.context.active_object
     glow.name = "glow"
     glow.data.materials.append(U.emission_material("Glow", strength=4.0))
+    glow.data.materials.append(U.emission_material("Dim", strength=0.5))  # slot 1: unused
+    # A second occluder rises from frame 1 to 2 by a shape key.
+    mover = U.add_box("mover", (0.2, 0.2, 0.05), (0.5, -0.4, 0.3))
+    mover.shape_key_add(name="Basis")
+    raised = mover.shape_key_add(name="raised")
+    for point in raised.data:
+        point.co.z += 0.2
+    for frame, value in ((1, 0.0), (2, 1.0)):
+        raised.value = value
+        raised.keyframe_insert("value", frame=frame)
+    bpy.context.scene.frame_set(1)
     U.constant_world(strength=0.2)
     return receiver, img
 
@@ -51,8 +67,9 @@ def bake(receiver, img):
 
 
 def fresh(receiver, img):
-    """The same bake with no kept scene."""
+    """The same bake with no kept scene and no kept mesh reads."""
     scene_cache.clear()
+    mesh_cache.clear()
     pixels, reused = bake(receiver, img)
     check(not reused, "a bake after clear() reused a scene")
     return pixels
@@ -63,6 +80,12 @@ def move_vertex():
     for v in me.vertices[:4]:
         v.co.x += 1.0
     me.update()
+
+
+def glow_material_index():
+    me = bpy.data.objects["glow"].data
+    for polygon in list(me.polygons)[::2]:
+        polygon.material_index = 1  # same vertices, half the faces dimmer
 
 
 def add_modifier():
@@ -76,6 +99,8 @@ CHANGES = {
     "light moved": lambda: setattr(bpy.data.objects["lamp"], "location", (0.4, -0.2, 1.0)),
     "mesh vertex": move_vertex,
     "modifier": add_modifier,
+    "material index": glow_material_index,
+    "frame with a shape key": lambda: bpy.context.scene.frame_set(2),
     "occluder hidden": lambda: bpy.data.objects["occluder"].hide_set(True),
     "emission strength": lambda: setattr(
         bpy.data.materials["Glow"].node_tree.nodes["Emission"].inputs["Strength"],
@@ -94,9 +119,11 @@ def main():
     scene_cache.clear()
     before, reused = bake(receiver, img)
     check(not reused, "the first bake reused a scene")
+    hits = mesh_cache.stats["hits"]
     again, reused = bake(receiver, img)
     check(reused, "an unchanged scene was committed again")
     check(np.array_equal(again, before), "the reused scene baked other values")
+    check(mesh_cache.stats["hits"] >= hits + 2, "the occluder and emitter were read again")
 
     for name, change in CHANGES.items():
         change()
