@@ -402,22 +402,20 @@ struct PointLighting::Impl {
                     [](const Light& l) { return l.cast_shadow; }) &&
         std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
                     [](const Light& l) { return l.type == LightType::Triangle; });
+    // The scene's (first) world light, else ~0u.
+    const std::uint32_t world_light_ = [this] {
+        for (std::uint32_t l = 0; l < p_.scene.lights().size(); ++l)
+            if (p_.scene.lights()[l].type == LightType::World) return l;
+        return ~0u;
+    }();
     // BSDF directions too take integrand_to_blocker where a world lies along
     // every one of them: integrand() then traces a ray for each anyway, after
     // an all-hits query of the emitter shapes that the closest hit makes
     // unneeded where it meets a surface that does not emit or, with
     // shapes_in_geometry_, nothing.
-    const bool bsdf_to_blocker_ =
-        clip_at_blocker_ &&
-        std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
-                    [](const Light& l) { return l.type == LightType::World; });
+    const bool bsdf_to_blocker_ = clip_at_blocker_ && world_light_ != ~0u;
     // The world light when the plan sees it through emitters, else ~0u.
-    const std::uint32_t world_through_ = [this] {
-        if (!p_.plan.world_through_emitters) return ~0u;
-        for (std::uint32_t l = 0; l < p_.scene.lights().size(); ++l)
-            if (p_.scene.lights()[l].type == LightType::World) return l;
-        return ~0u;
-    }();
+    const std::uint32_t world_through_ = p_.plan.world_through_emitters ? world_light_ : ~0u;
     // Every light with an emitter shape is an emissive triangle, which the
     // geometry holds: a ray that meets no surface crosses no such shape.
     const bool shapes_in_geometry_ = std::all_of(

@@ -109,15 +109,18 @@ bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techni
     return bsdf;
 }
 
-// world_left_to_bsdf, with emissive triangles whose radiance is at least the
-// world's in every channel (so the emitters' part L_e − L_w of the integrand
-// stays non-negative), every integrated light casting shadows and seen by
-// BSDF rays (one closest hit then tells what a direction meets first).
+// Whether a world left to `bsdf` (minor_world, world_left_to_bsdf) is seen
+// through emissive triangles: occluding geometry, and emissive triangles whose
+// radiance is at least the world's in every channel (so the emitters' part
+// L_e − L_w of the integrand stays non-negative), every integrated light
+// casting shadows and seen by BSDF rays (one closest hit then tells what a
+// direction meets first; no light is then hidden from BSDF rays, and some
+// light casts shadows: the plan's shadow_rays is has_occluders()).
 // Measured per sample on the emission_world reproduction (64², optimal,
 // 4 seeds): the world's part alone, 32 cosine draws, relMSE 2.6e-4 with the
 // quad and the box as occluders, 1.5e-4 with the box alone.
-bool world_through_emitters(const Scene& scene, bool world_by_bsdf, bool shadow_rays) {
-    if (!world_by_bsdf || !shadow_rays) return false;
+bool world_seen_through_emitters(const Scene& scene) {
+    if (!scene.geometry().has_occluders()) return false;
     const Light* world = nullptr;
     for (const Light& l : scene.lights())
         if (l.type == LightType::World) world = &l;
@@ -157,9 +160,7 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
     }
     plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
     plan.world_by_bsdf = world_left_to_bsdf(scene, techniques, samples);
-    plan.world_through_emitters =
-        !plan.bsdf_invisible_lights &&
-        world_through_emitters(scene, plan.world_by_bsdf, plan.shadow_rays);
+    plan.world_through_emitters = plan.world_by_bsdf && world_seen_through_emitters(scene);
     if (plan.delta_lights > kManyDeltaLights) {
         plan.sample_delta_lights = true;
         for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
@@ -314,8 +315,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // before 0.99/1.17/1.19/0.82; one per round 0.74/0.87; two 0.41/0.91/
     // 0.56/0.51. Per sample (--equal-samples, 4–128 spp) one per round is
     // the better, 1.26 × Cycles' relMSE (before 1.48), two 1.74.
-    const bool world_seen_through =
-        world_to_bsdf && world_through_emitters(scene, true, scene.geometry().has_occluders());
+    const bool world_seen_through = world_to_bsdf && world_seen_through_emitters(scene);
     if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", world_seen_through ? 2 : 1);
 }
 

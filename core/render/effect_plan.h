@@ -29,7 +29,7 @@ struct EffectPlan {
     // techniques). Their sum is the old integrand at every ω: unbiased. The
     // world's cosine draws then see Bernoulli noise only from the surfaces
     // that do not emit, and the light technique integrates the emitters'
-    // occlusion of the world. See world_through_emitters (effect_plan.cpp).
+    // occlusion of the world. See world_seen_through_emitters (effect_plan.cpp).
     bool world_through_emitters = false;
     // Many delta lights: their sum is estimated by drawing delta_samples of
     // them per round from a light tree instead of one shadow ray each.
