@@ -305,18 +305,18 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // at (a world in the light techniques is drawn by cosine already, and
     // among many emitters `bsdf` joins the tree for the world above).
     const bool has_bsdf = integrated > kManyIntegratedLights && world;
-    // A world seen through emitters is `bsdf`'s alone, and its cosine draws
-    // (one closest hit each) cost about half a solid-angle draw: two per
-    // round. Emission_world reproduction (64², 4 seeds, CPU of one thread):
-    // one per round, 64 samples relMSE 2.3e-4 in 0.21 s; two, 96 samples
-    // 1.3e-4 in 0.30 s (before the split: 2.6e-4 in 0.21 s, 9.5e-5 in 0.5 s).
-    // The Cycles race (bench_cycles, emission_world, optimal ÷ Cycles at
-    // equal time, geometric mean, runs alternated on a loaded machine):
-    // before 0.99/1.17/1.19/0.82; one per round 0.74/0.87; two 0.41/0.91/
-    // 0.56/0.51. Per sample (--equal-samples, 4–128 spp) one per round is
-    // the better, 1.26 × Cycles' relMSE (before 1.48), two 1.74.
-    const bool world_seen_through = world_to_bsdf && world_seen_through_emitters(scene);
-    if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", world_seen_through ? 2 : 1);
+    // One cosine draw a round, also for a world seen through emitters
+    // (world_seen_through_emitters): there the light draws carry the
+    // penumbrae of the emitters, which two cosine draws a round starved.
+    // Emission_world (128², optimal, bench_cycles --equal-samples, 2 seeds,
+    // relMSE ÷ Cycles' at 16/64/256 samples): two per round 1.68/1.75/1.89,
+    // one 1.27/1.30/1.29 (1 light : 2 cosine drew a third of the samples
+    // from the light: 2.3× Cycles' error beside the box, 0.5× elsewhere).
+    // A round of one each costs 1.2× a round of one and two per sample (CPU
+    // time, 5 alternated bakes at 96/384/1024 samples): 0.80–0.90× the
+    // relMSE at equal time. Two light draws to one cosine: 2.0/2.3/2.5.
+    // (Two cosine draws, ce01fcb, rested on single race runs.)
+    if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", 1);
 }
 
 }  // namespace omis
