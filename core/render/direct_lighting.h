@@ -90,7 +90,8 @@ public:
     std::vector<std::uint32_t> integrated, delta;
     std::vector<double> power;  // per light, for `power` selection
     // Per light, what tells whether a rect or triangle is tiny in solid angle
-    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp).
+    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp);
+    // empty among many lights, where each light's is made from the light.
     struct TinyShape {
         Vec3 centroid;
         double area_limit = std::numeric_limits<double>::infinity();
