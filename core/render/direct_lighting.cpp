@@ -437,11 +437,7 @@ struct PointLighting::Impl {
     // emission_world reproduction (omis module, 128², one thread, CPU per
     // bake, best of 5 interleaved runs of 10): samples=2 42 → 34 ms;
     // samples=64 unchanged within the noise (±10 %).
-    const bool cheap_tables_ = std::all_of(
-        p_.settings.techniques.begin(), p_.settings.techniques.end(), [](const Technique& t) {
-            return t.bsdf || t.selection == LightSelection::Uniform ||
-                   t.selection == LightSelection::Power;
-        });
+    const bool cheap_tables_ = !p_.keeps_texel_tables;
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -1902,6 +1898,11 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
     }
     if (plan.sample_delta_lights)
         delta_selector = &scene.light_selector(LightSelector::Kind::Tree, true);
+    keeps_texel_tables = std::any_of(
+        settings.techniques.begin(), settings.techniques.end(), [](const Technique& t) {
+            return !t.bsdf && t.selection != LightSelection::Uniform &&
+                   t.selection != LightSelection::Power;
+        });
 }
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {

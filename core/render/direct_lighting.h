@@ -109,6 +109,11 @@ public:
     // Per texel (PointLighting::shade's stream), what a bake's later passes
     // reuse: the techniques taking part and their light tables.
     mutable TexelTables texel_tables;
+    // Whether shading keeps anything there: not when every light technique's
+    // table needs no irradiance (`uniform`, `power`: cheaper to make again
+    // at every pass than to keep; direct_lighting.cpp). A bake then need not
+    // index its points in texel_tables.
+    bool keeps_texel_tables = true;
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes
