@@ -1785,6 +1785,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // round: its seed hashes were ~190 of a sample's ~5,150 instructions on an
     // emission_world-like bake (callgrind). Same seeds: bit-identical results.
     technique_sequences_.assign(delta_group * std::size_t(K), std::nullopt);
+    const bool timed = setup_timing_ && setup_timing_->on;
+    const auto rounds_start =
+        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
@@ -1821,6 +1824,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             }
         }
     }
+    if (timed)
+        setup_timing_->rounds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - rounds_start).count();
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;

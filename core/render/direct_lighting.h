@@ -232,10 +232,12 @@ public:
     // What a bake's first pass spends that its later passes do not: the
     // set-up of the tables kept for a point's later passes, beside all of the
     // shading, in seconds, timed while `on`. The bake predicts a later pass's
-    // duration from the first one without that set-up.
+    // duration from the first one without that set-up. `rounds`: the part
+    // spent drawing the rounds' samples, which grows with the rounds (the
+    // rest of a point's shading every pass repeats whatever its size).
     struct SetupTiming {
         bool on = false;
-        double kept_setup = 0, shading = 0;
+        double kept_setup = 0, shading = 0, rounds = 0;
     };
     SetupTiming setup_timing;
 
