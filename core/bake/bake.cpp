@@ -178,11 +178,11 @@ SampleBudget plan_samples(const LightingContext& context, long long samples, int
 // fixed part the first pass measured (set_fixed; 0: in proportion to it).
 class PassTimer {
 public:
-    // A later pass's fixed part as the first pass measured it: a bake's
-    // first passes are all one round, and in proportion to them a round
-    // looked up to 2.5× its cost (race's area at 128²: a one-round pass
-    // ~0.8 round of per-point set-up, repeated every pass), so a 0.1 s
-    // budget grew to 2 rounds where 4 fitted.
+    // A later pass's fixed part as the first pass measured it. A bake's
+    // first passes are one round each, and every pass repeats ~0.8 round of
+    // per-point work (bench "area", 128²): in proportion to the first pass
+    // the second was predicted 1.14–1.82× its duration, with this 0.90–1.66×
+    // (bench/results/budgets.txt).
     void set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
     void add(double samples, double seconds) {
         if (n_ > 0 && samples != s_[1]) {
@@ -196,7 +196,7 @@ public:
     // The most samples per point a pass can take in `seconds`.
     double fit(double seconds) const {
         if (n_ == 0 || !(s_[1] > 0)) return 0;
-        // At most most of the last pass is fixed: a round still costs.
+        // At most kMostFixed of the last pass is fixed: its rounds cost too.
         double a = std::min(fixed_, kMostFixed * t_[1]), b = (t_[1] - a) / s_[1];
         if (n_ > 1 && s_[0] != s_[1] && s_[0] > 0) {
             const double slope = (t_[1] - t_[0]) / (s_[1] - s_[0]);
@@ -472,8 +472,9 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     total_work_ = double(std::max<std::size_t>(1, to_shade)) *
                   double(std::max<long long>(1, samples_per_point));
     context_.keep_going = [this] { return keep_going(); };
-    // The points are 0 … count − 1; their slots (~50 bytes each, zeroed) only
-    // where the shading keeps tables: 3 % of a 128² samples=1 bake's time.
+    // The points are 0 … count − 1; their slots (~48 bytes each, allocated,
+    // zeroed and freed by every bake) only where the shading keeps tables: a
+    // 128² samples=1 bake took 1.04–1.57× as long with them (budgets.txt).
     if (context_.keeps_texel_tables) context_.texel_tables.index_points(layout_.count);
 
     // Under a time budget the first pass — the part a budget cannot cut — is
@@ -527,10 +528,10 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
     Shaded r{i, {}, 0, {}};
     double variance[3], own[3];
     StreamEstimates* streams = tallies_.empty() ? nullptr : &r.streams;
-    // The first pass times its set-up on every kSetupTimingStride-th point
-    // only: its clock reads per point (four cost ~5 % of a one-round pass;
-    // six now) would, and time_pass needs only the ratios of set-up and
-    // rounds to shading.
+    // The first pass times its set-up and sampling on every
+    // kSetupTimingStride-th point only: clock reads at every point cost ~5 %
+    // of a one-round pass (four then, six now), and time_pass needs only the
+    // ratios of set-up and rounds to shading.
     shader.setup_timing.on = pass_count_ == 0 && i % kSetupTimingStride == 0;
     try {
         if (layout_.lightmap()) {
