@@ -173,10 +173,17 @@ SampleBudget plan_samples(const LightingContext& context, long long samples, int
 }
 
 // Predicts a pass's duration from the passes so far as a + b·samples (a: the
-// fixed cost of a pass — solves, thread wake-up), through the last two passes
-// of different sizes, else in proportion to the last one.
+// fixed cost of a pass — per-point set-up, solves, thread wake-up), through
+// the last two passes of different sizes, else from the last one with the
+// fixed part the first pass measured (set_fixed; 0: in proportion to it).
 class PassTimer {
 public:
+    // A later pass's fixed part as the first pass measured it. A bake's
+    // first passes are one round each, and every pass repeats ~0.8 round of
+    // per-point work (bench "area", 128²): in proportion to the first pass
+    // the second was predicted 1.14–1.82× its duration, with this 0.90–1.66×
+    // (bench/results/budgets.txt).
+    void set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
     void add(double samples, double seconds) {
         if (n_ > 0 && samples != s_[1]) {
             s_[0] = s_[1];
@@ -189,7 +196,8 @@ public:
     // The most samples per point a pass can take in `seconds`.
     double fit(double seconds) const {
         if (n_ == 0 || !(s_[1] > 0)) return 0;
-        double b = t_[1] / s_[1], a = 0;
+        // At most kMostFixed of the last pass is fixed: its rounds cost too.
+        double a = std::min(fixed_, kMostFixed * t_[1]), b = (t_[1] - a) / s_[1];
         if (n_ > 1 && s_[0] != s_[1] && s_[0] > 0) {
             const double slope = (t_[1] - t_[0]) / (s_[1] - s_[0]);
             if (slope > 0) {
@@ -201,7 +209,9 @@ public:
     }
 
 private:
+    static constexpr double kMostFixed = 0.75;
     double s_[2] = {0, 0}, t_[2] = {0, 0};
+    double fixed_ = 0;
     int n_ = 0;
 };
 
@@ -378,7 +388,7 @@ private:
     bool noise_target_met() const;
     void record_pass(double sampling_start, bool tail);
     void forget_probe();
-    double later_pass_share();
+    void time_pass(std::uint32_t samples, double seconds);
     void write_outputs();
     void fill_margin();
     void fill_stats();
@@ -462,7 +472,10 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     total_work_ = double(std::max<std::size_t>(1, to_shade)) *
                   double(std::max<long long>(1, samples_per_point));
     context_.keep_going = [this] { return keep_going(); };
-    context_.texel_tables.index_points(layout_.count);  // the points are 0 … count − 1
+    // The points are 0 … count − 1; their slots (~48 bytes each, allocated,
+    // zeroed and freed by every bake) only where the shading keeps tables: a
+    // 128² samples=1 bake took 1.04–1.57× as long with them (budgets.txt).
+    if (context_.keeps_texel_tables) context_.texel_tables.index_points(layout_.count);
 
     // Under a time budget the first pass — the part a budget cannot cut — is
     // a single round, so small budgets are not eaten by it; it also measures
@@ -515,9 +528,10 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
     Shaded r{i, {}, 0, {}};
     double variance[3], own[3];
     StreamEstimates* streams = tallies_.empty() ? nullptr : &r.streams;
-    // The first pass times its set-up on every kSetupTimingStride-th point
-    // only: four clock reads per point cost ~5 % of a one-round pass, and
-    // later_pass_share needs only the ratio of set-up to shading.
+    // The first pass times its set-up and sampling on every
+    // kSetupTimingStride-th point only: clock reads at every point cost ~5 %
+    // of a one-round pass (four then, six now), and time_pass needs only the
+    // ratios of set-up and rounds to shading.
     shader.setup_timing.on = pass_count_ == 0 && i % kSetupTimingStride == 0;
     try {
         if (layout_.lightmap()) {
@@ -853,7 +867,7 @@ void Baker::run_passes() {
         if (replace_probe_) forget_probe();
         const double pass_start = elapsed();
         run_pass(pass);
-        timer_.add(pass.samples, (elapsed() - pass_start) * later_pass_share());
+        time_pass(pass.samples, elapsed() - pass_start);
         ++pass_count_;
         if (cancel_) {
             status_ = BakeStatus::Cancelled;
@@ -882,20 +896,31 @@ void Baker::run_passes() {
     }
 }
 
-// The share of the pass that ran of what a later pass of its size repeats:
-// all of it, except the first pass's set-up of the tables its points keep
-// (PointLighting::SetupTiming: 8–39 % of a one-round first pass on the
-// race's scenes, which made the second pass look that much longer and could
-// end a 0.05 s budget a round early).
-double Baker::later_pass_share() {
-    if (pass_count_ > 0) return 1.0;
-    double setup = 0, shading = 0;
+// The pass that ran, for the timer. Of the first pass, only what a later pass
+// of its size repeats: all of it but the set-up of the tables its points keep
+// (PointLighting::SetupTiming: 8–39 % of a one-round first pass on the race's
+// scenes, which made the second pass look that much longer and could end a
+// 0.05 s budget a round early); and of that, the part outside the rounds'
+// sampling is the fixed part of every later pass.
+void Baker::time_pass(std::uint32_t samples, double seconds) {
+    if (pass_count_ > 0) {
+        timer_.add(samples, seconds);
+        return;
+    }
+    double setup = 0, shading = 0, rounds = 0;
     for (PointLighting& shader : shaders_) {
         setup += shader.setup_timing.kept_setup;
         shading += shader.setup_timing.shading;
+        rounds += shader.setup_timing.rounds;
         shader.setup_timing = {};
     }
-    return shading > 0 ? std::clamp(1.0 - setup / shading, 0.0, 1.0) : 1.0;
+    if (!(shading > 0)) {
+        timer_.add(samples, seconds);
+        return;
+    }
+    const double repeated = std::clamp(1.0 - setup / shading, 0.0, 1.0);
+    timer_.add(samples, seconds * repeated);
+    timer_.set_fixed(seconds * std::max(0.0, repeated - rounds / shading));
 }
 
 // The probe pass's estimates leave the running means, the error tallies and

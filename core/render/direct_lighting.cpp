@@ -448,11 +448,7 @@ struct PointLighting::Impl {
     // emission_world reproduction (omis module, 128², one thread, CPU per
     // bake, best of 5 interleaved runs of 10): samples=2 42 → 34 ms;
     // samples=64 unchanged within the noise (±10 %).
-    const bool cheap_tables_ = std::all_of(
-        p_.settings.techniques.begin(), p_.settings.techniques.end(), [](const Technique& t) {
-            return t.bsdf || t.selection == LightSelection::Uniform ||
-                   t.selection == LightSelection::Power;
-        });
+    const bool cheap_tables_ = !p_.keeps_texel_tables;
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
@@ -1800,6 +1796,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // round: its seed hashes were ~190 of a sample's ~5,150 instructions on an
     // emission_world-like bake (callgrind). Same seeds: bit-identical results.
     technique_sequences_.assign(delta_group * std::size_t(K), std::nullopt);
+    const bool timed = setup_timing_ && setup_timing_->on;
+    const auto rounds_start =
+        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
@@ -1836,6 +1835,9 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             }
         }
     }
+    if (timed)
+        setup_timing_->rounds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - rounds_start).count();
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;
@@ -1914,6 +1916,11 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
     }
     if (plan.sample_delta_lights)
         delta_selector = &scene.light_selector(LightSelector::Kind::Tree, true);
+    keeps_texel_tables = std::any_of(
+        settings.techniques.begin(), settings.techniques.end(), [](const Technique& t) {
+            return !t.bsdf && t.selection != LightSelection::Uniform &&
+                   t.selection != LightSelection::Power;
+        });
 }
 
 const LightSelector* LightingContext::selector(LightSelection selection) const {

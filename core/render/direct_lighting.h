@@ -110,6 +110,11 @@ public:
     // Per texel (PointLighting::shade's stream), what a bake's later passes
     // reuse: the techniques taking part and their light tables.
     mutable TexelTables texel_tables;
+    // Whether shading keeps anything there: not when every light technique's
+    // table needs no irradiance (`uniform`, `power`: cheaper to make again
+    // at every pass than to keep; direct_lighting.cpp). A bake then need not
+    // index its points in texel_tables.
+    bool keeps_texel_tables = true;
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes
@@ -228,10 +233,12 @@ public:
     // What a bake's first pass spends that its later passes do not: the
     // set-up of the tables kept for a point's later passes, beside all of the
     // shading, in seconds, timed while `on`. The bake predicts a later pass's
-    // duration from the first one without that set-up.
+    // duration from the first one without that set-up. `rounds`: the part
+    // spent drawing the rounds' samples, which grows with the rounds (the
+    // rest of a point's shading every pass repeats whatever its size).
     struct SetupTiming {
         bool on = false;
-        double kept_setup = 0, shading = 0;
+        double kept_setup = 0, shading = 0, rounds = 0;
     };
     SetupTiming setup_timing;
 

@@ -97,8 +97,8 @@ TEST_CASE("texel tables: tables that need no irradiance are made again, not kept
     }
 }
 
-TEST_CASE("texel tables: set-up timing counts the kept tables' set-up, only while on",
-          "[texel_tables]") {
+TEST_CASE("texel tables: set-up timing counts the kept tables' set-up and the rounds' "
+          "sampling, only while on", "[texel_tables]") {
     Scene scene;
     add_spread_scene(scene);
     const LightingContext context(scene, settings_with(Strategy::Balance));
@@ -108,14 +108,18 @@ TEST_CASE("texel tables: set-up timing counts the kept tables' set-up, only whil
     shader.shade(0, 0, 1, f.centre(), &f, v, nullptr);  // off: nothing timed
     CHECK(shader.setup_timing.shading == 0);
     CHECK(shader.setup_timing.kept_setup == 0);
+    CHECK(shader.setup_timing.rounds == 0);
     shader.setup_timing.on = true;
     shader.shade(1, 0, 1, f.centre(), &f, v, nullptr);  // keeps its tables: set-up timed
     const PointLighting::SetupTiming first = shader.setup_timing;
     CHECK(first.kept_setup > 0);
-    CHECK(first.kept_setup <= first.shading);
+    CHECK(first.rounds > 0);
+    // Set-up and sampling are disjoint parts of the shading.
+    CHECK(first.kept_setup + first.rounds <= first.shading);
     shader.shade(1, 1, 1, f.centre(), &f, v, nullptr);  // takes them back: shading only
     CHECK(shader.setup_timing.kept_setup == first.kept_setup);
     CHECK(shader.setup_timing.shading > first.shading);
+    CHECK(shader.setup_timing.rounds > first.rounds);
 }
 
 TEST_CASE("texel tables: points without a footprint keep nothing at their first pass",
