@@ -19,7 +19,7 @@
 // squared mean ("relvar/s", the mean over receivers), and a hash of every
 // estimate's bits (a change that keeps the estimates bit-identical keeps it).
 //
-// Flags: --quick (fewer receivers), --only sphere|shadowed|point|area, --emitters N
+// Flags: --quick (fewer receivers), --only sphere|shadowed|race|point|area, --emitters N
 // (only the scenes of N emitters: for profiling one scene), --reps N
 // (repetitions, 5 unless given: more for a profile), --texels (each receiver
 // spreads its samples over its grid cell, as a bake's texel does: every
@@ -82,6 +82,18 @@ void add_area_grid(Scene& scene, int side) {
         }
 }
 
+// bench_cycles.py's emissive_mesh race scene (tests/blender/cycles_scenes.py):
+// a UV sphere of 128 × 64 segments (16,128 triangles, radius 0.3 at
+// (0.2, 0.1, 0.6), Blender's emission 3 × (1, 0.85, 0.7)) under a 0.3 m square
+// light of 40 W at 1.4 m, emitting down (radiance P/(4A), as
+// omis.blender_units.area_light); its receivers cover the race's 2 m floor.
+void add_race_mesh(Scene& scene) {
+    testing::add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 64, 128,
+                                 Vec3(3.0, 2.55, 2.1));
+    scene.add_light(make_rect_light(Vec3(0.2, 0.05, 1.4), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
+                                    Vec3(1, 1, 1) * (40.0 / (4.0 * 0.09)), false, kPi));
+}
+
 // CPU time of this thread (s): on the shared machine, time spent waiting for
 // a core is not the code's.
 double cpu_seconds() {
@@ -119,9 +131,10 @@ struct Timed {
     bool texels = false;
     double cell = 0;
 
+    // extent: the side of the square of receivers about the origin.
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
-          int grid, bool texels_, int rounds, bool fast_paths)
-        : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(4.0 / grid) {
+          int grid, bool texels_, int rounds, bool fast_paths, double extent = 4.0)
+        : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(extent / grid) {
         add_floor(scene);
         build(scene);
         const double c0 = cpu_seconds();
@@ -132,7 +145,8 @@ struct Timed {
         settings.fast_paths = fast_paths;
         for (int j = 0; j < grid; ++j)
             for (int i = 0; i < grid; ++i)
-                points.emplace_back(-2 + 4.0 * (i + 0.5) / grid, -2 + 4.0 * (j + 0.5) / grid, 0);
+                points.emplace_back(-0.5 * extent + extent * (i + 0.5) / grid,
+                                    -0.5 * extent + extent * (j + 0.5) / grid, 0);
         const double t0 = cpu_seconds();
         context = std::make_unique<LightingContext>(scene, settings);
         setup_ms = 1e3 * (cpu_seconds() - t0);
@@ -211,7 +225,7 @@ int main(int argc, char** argv) {
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
         else if (std::strcmp(argv[i], "--general") == 0) general = true;
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|race|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
                          argv[0]);
             return 2;
         }
@@ -244,6 +258,9 @@ int main(int argc, char** argv) {
                                    {{0, 1, 2}, {0, 2, 3}});
                     },
                     grid, texels, rounds, fast));
+        if (wanted("race", 16129))
+            scenes.push_back(std::make_unique<Timed>("race mesh", 16129, add_race_mesh, grid,
+                                                     texels, rounds, fast, 2.0));
         for (int side : {1, 4, 16, 100})
             if (wanted("point", side * side))
                 scenes.push_back(std::make_unique<Timed>(

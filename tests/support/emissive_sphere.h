@@ -12,9 +12,9 @@
 namespace omis::testing {
 
 // `stacks`×`slices` quads (caps as triangles): 2·slices·(stacks − 1)
-// triangles, outward winding, emitting 1 W/(m² sr).
+// triangles, outward winding, emitting `radiance` (W/(m² sr)).
 inline void add_emissive_sphere(Scene& scene, const Vec3& centre, double radius, int stacks,
-                                int slices) {
+                                int slices, const Vec3& radiance = Vec3(1, 1, 1)) {
     std::vector<Vec3> p{centre + Vec3(0, 0, radius)};
     for (int i = 1; i < stacks; ++i)
         for (int j = 0; j < slices; ++j) {
@@ -37,7 +37,7 @@ inline void add_emissive_sphere(Scene& scene, const Vec3& centre, double radius,
             t.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
         }
     }
-    scene.add_mesh(p, t, Vec3(1, 1, 1));
+    scene.add_mesh(p, t, radiance);
 }
 
 }  // namespace omis::testing
