@@ -391,7 +391,9 @@ struct PointLighting::Impl {
     struct Drawn {
         std::uint32_t light = ~0u;
         Vec3 w;
-        ShapeSampler sampler = ShapeSampler::Area;  // the one actually used at x
+        // The technique's (a tiny light's draw used Area: pdf() repeats the
+        // choice from the light and the point).
+        ShapeSampler sampler = ShapeSampler::Area;
         double pdf = 0;
         std::uint64_t point = ~0ull;  // point_serial_ of the draw
     } drawn_;
@@ -451,6 +453,8 @@ struct PointLighting::Impl {
     const bool cheap_tables_ = !p_.keeps_texel_tables;
     const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
                                   p_.settings.strategy != Strategy::Cutoff;
+    // `sampler`: the technique's, before the tiny-light substitution (the
+    // draw made it for the same light and point).
     bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
         if (!reuse_drawn_pdf_ || drawn_.light != l || drawn_.point != point_serial_ || drawn_.sampler != sampler ||
             drawn_.w.x != w.x || drawn_.w.y != w.y || drawn_.w.z != w.z)
@@ -509,6 +513,7 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
                                                        const Vec3& x, const Vec3& n, double u1,
                                                        double u2) {
     const Light& light = p_.scene.lights()[l];
+    const ShapeSampler asked = sampler;
     if (sampler == ShapeSampler::SolidAngle && tiny(l, light, x))
         sampler = ShapeSampler::Area;
     const SolidAngleCache* c =
@@ -516,7 +521,7 @@ std::optional<LightSample> PointLighting::Impl::sample(std::uint32_t l, ShapeSam
     std::optional<LightSample> s;
     if (!c) s = sample_light(light, sampler, x, n, u1, u2);
     else s = sample_cached(*c, u1, u2);
-    if (s) drawn_ = {l, s->dir, sampler, s->pdf, point_serial_};
+    if (s) drawn_ = {l, s->dir, asked, s->pdf, point_serial_};
     return s;
 }
 
@@ -534,11 +539,13 @@ std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCa
 
 double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w) {
+    // The sample's own density, before the light's record is read again
+    // for the tiny-light test (the draw made the same choice).
+    double drawn;
+    if (drawn_density(l, sampler, w, drawn)) return drawn;
     const Light& light = p_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny(l, light, x))
         sampler = ShapeSampler::Area;
-    double drawn;
-    if (drawn_density(l, sampler, w, drawn)) return drawn;  // the sample's own density
     // A direction that misses the light has density 0 there: no need to
     // prepare its shape at x (the hit test's slack keeps the edge).
     if (sampler == ShapeSampler::SolidAngle && !solid_angle_ready(l) &&

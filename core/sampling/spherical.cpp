@@ -50,9 +50,10 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.x0_ = dot(d, r.ex_);
     r.y0_ = dot(d, r.ey_);
     r.y1_ = r.y0_ + r.H_;
-    r.phi0_ = std::atan2(r.x0_, r.z_);
     r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
     r.r0_ = std::hypot(r.x0_, r.z_);
+    r.cos_phi0_ = r.z_ / r.r0_;  // φ0 = atan2(x0, z): the azimuth of the edge at x0
+    r.sin_phi0_ = r.x0_ / r.r0_;
     const Vec3 near0{r.x0_, r.y0_, -r.z_}, near1{r.x0_, r.y1_, -r.z_};  // sub_solid_angle's a, d
     r.la_ = length(near0);
     r.ld_ = length(near1);
@@ -62,11 +63,19 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     return r;
 }
 
-double SphericalRect::width_at(double delta, double c) const {
+double SphericalRect::width_at(double delta, double sin_delta, double c) const {
     if (delta >= dphi_) return W_;
     if (!(c > 0)) return W_;
     // z (tan φ − tan φ0) = sin δ · r0 / cos φ: no difference of two tangents.
-    return std::clamp(std::sin(delta) * r0_ / c, 0.0, W_);
+    return std::clamp(sin_delta * r0_ / c, 0.0, W_);
+}
+
+void SphericalRect::rotate(double delta, double& sin_delta, double& cos_phi,
+                           double& sin_phi) const {
+    sin_delta = std::sin(delta);
+    const double cos_delta = std::cos(delta);
+    cos_phi = cos_phi0_ * cos_delta - sin_phi0_ * sin_delta;
+    sin_phi = sin_phi0_ * cos_delta + cos_phi0_ * sin_delta;
 }
 
 double SphericalRect::sub_solid_angle(double w) const {
@@ -105,9 +114,10 @@ DirSample SphericalRect::sample(double u1, double u2) const {
     const double ct = std::cos(0.5 * target), st = std::sin(0.5 * target);
     double lo = 0, hi = dphi_, delta = u1 * dphi_;
     for (int it = 0; it < 100; ++it) {
-        const double c = std::cos(phi0_ + delta);
+        double sd, c, unused_sin;
+        rotate(delta, sd, c, unused_sin);
         double x, y;
-        half_angle_vector(width_at(delta, c), x, y);
+        half_angle_vector(width_at(delta, sd, c), x, y);
         const double r = std::sqrt(x * x + y * y);
         const double g = r > 0 ? 2.0 * (y * ct - x * st) / r : -target;
         if (g == 0) break;
@@ -128,8 +138,8 @@ DirSample SphericalRect::sample(double u1, double u2) const {
         delta = next;
         if (done) break;
     }
-    const double phi = phi0_ + delta;
-    const double cp = std::cos(phi), sp = std::sin(phi);
+    double sd, cp, sp;
+    rotate(delta, sd, cp, sp);
     const double h0 = h_at(cp, y0_), h1 = h_at(cp, y1_);
     const double hv = std::clamp(h0 + u2 * (h1 - h0), -1.0, 1.0);
     const double cv = std::sqrt(std::max(0.0, (1.0 - hv) * (1.0 + hv)));
@@ -157,10 +167,14 @@ double SphericalRect::pdf(const Vec3& w) const {
 
 Point2 SphericalRect::invert(const Vec3& w) const {
     const double lx = dot(w, ex_), ly = dot(w, ey_), lz = dot(w, ez_);
-    const double phi = std::atan2(lx, -lz);
-    const double delta = std::clamp(phi - phi0_, 0.0, dphi_);
-    const double u1 = sub_solid_angle(width_at(delta, std::cos(phi0_ + delta))) / omega_;
-    const double c = std::cos(phi);
+    // φ − φ0 from the direction's azimuth (sin, cos) ∝ (lx, −lz) rotated by −φ0.
+    const double delta = std::clamp(std::atan2(lx * cos_phi0_ + lz * sin_phi0_,
+                                               lx * sin_phi0_ - lz * cos_phi0_),
+                                    0.0, dphi_);
+    double sd, cd, unused_sin;
+    rotate(delta, sd, cd, unused_sin);
+    const double u1 = sub_solid_angle(width_at(delta, sd, cd)) / omega_;
+    const double c = -lz / std::hypot(lx, lz);  // cos φ
     const double h0 = h_at(c, y0_), h1 = h_at(c, y1_);
     return {std::clamp(u1, 0.0, 1.0), std::clamp((ly - h0) / (h1 - h0), 0.0, 1.0)};
 }

@@ -50,11 +50,15 @@ private:
     double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
     // Ω/2 of [x0, x0+w] × [y0, y1] as the angle of (cos, sin) ∝ (x, y), y ≥ 0.
     void half_angle_vector(double w, double& x, double& y) const;
-    double width_at(double delta, double cos_phi) const;  // x(φ0+δ) − x0; cos_phi = cos(φ0+δ)
+    // x(φ0+δ) − x0, from sin δ and cos_phi = cos(φ0+δ).
+    double width_at(double delta, double sin_delta, double cos_phi) const;
+    // sin δ, cos(φ0+δ) and sin(φ0+δ) from one sincos of δ: φ0 itself (an
+    // atan2 per shape) is never formed.
+    void rotate(double delta, double& sin_delta, double& cos_phi, double& sin_phi) const;
     double h_at(double cos_phi, double y) const;
     Vec3 ex_, ey_, ez_;  // ez points from the plane toward x
     double x0_ = 0, y0_ = 0, y1_ = 0, W_ = 0, H_ = 0, z_ = 0;  // z_ = distance to plane
-    double phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
+    double cos_phi0_ = 1, sin_phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
     double la_ = 0, ld_ = 0, ad_ = 0;  // |a|, |d|, a·d of sub_solid_angle's fixed corners
 };
 
