@@ -313,12 +313,7 @@ TEST_CASE("draws: N per texel, and exactly 4N where a texel's centre is shadowed
     const std::vector<float> sheet = {-10, -10, 1, 0.5f, -10, 1, 0.5f, 10, 1, -10, 10, 1};
     const std::vector<std::uint32_t> sheet_triangles = {0, 1, 2, 0, 2, 3};
     const std::vector<float> sheet_uvs(12, 0.f);
-    MeshInput occluder;
-    occluder.name = "sheet";
-    occluder.positions = ScalarArray::of(sheet.data(), 4, 3);
-    occluder.triangles = IndexArray{sheet_triangles.data(), 2, 3};
-    occluder.uvs = ScalarArray::of(sheet_uvs.data(), 6, 2);
-    scene.add_mesh(occluder);
+    scene.add_mesh(testing::two_triangle_mesh("sheet", sheet, sheet_triangles, sheet_uvs));
     for (double y : {0.25, 0.65})
         scene.add_light(make_rect_light(Vec3(0.45, y, 2), Vec3(0, 0.1, 0), Vec3(0.1, 0, 0),
                                         Vec3(5, 5, 5), false, kPi));
