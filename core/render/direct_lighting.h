@@ -117,9 +117,8 @@ public:
     mutable TexelTables texel_tables;
     // Whether shading keeps anything there: not when every light technique's
     // table needs no irradiance (`uniform`, `power`: cheaper to make again
-    // at every pass than to keep; direct_lighting.cpp) and no shadowed_draws
-    // probe's verdict is kept. A bake then need not index its points in
-    // texel_tables.
+    // at every pass than to keep; direct_lighting.cpp). A bake then need not
+    // index its points in texel_tables.
     bool keeps_texel_tables = true;
 
     // Polled every few hundred samples inside PointLighting::shade, so a
