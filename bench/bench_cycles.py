@@ -207,6 +207,9 @@ def run_scene(name, args):
                     x, t, s, _ = omis_run(objects, image, strategy, seed + 10, seconds=budget)
                 runs[label].append(dict(seconds=t, bake_seconds=s["bake_seconds"],
                                         samples_per_texel=s["samples_per_texel"],
+                                        # the work: shadowed texels draw more per sample
+                                        draws_per_texel=s.get("draws_per_texel",
+                                                              s["samples_per_texel"]),
                                         rel_mse=ref_o.rel_mse(x)))
         for label in STRATEGIES:
             mean = {key: float(np.mean([run[key] for run in runs[label]]))
@@ -216,7 +219,8 @@ def run_scene(name, args):
         r = rows[-3:]
         log(f"  budget {budget:g} s: " + "; ".join(
             f"{row['strategy']} {row['seconds']:.2f} s {row['samples_per_texel']:.0f} spp "
-            f"relMSE {row['rel_mse']:.2e}" for row in r))
+            + (f"({row['draws_per_texel']:.1f} draws) " if "draws_per_texel" in row else "")
+            + f"relMSE {row['rel_mse']:.2e}" for row in r))
     summary = dict(scene=name, t0=t0, k=k, ref_bias=bias, ref_agree=agree,
                    ref_spp=ref_spp, plan=stats0["plan"])
     return rows, summary
@@ -390,7 +394,7 @@ def main():
         f.write(text + "\n")
     with open(os.path.join(out, "bench_cycles.csv"), "w", newline="") as f:
         fields = ["scene", "strategy", "budget", "seconds", "bake_seconds",
-                  "samples_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles",
+                  "samples_per_texel", "draws_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles",
                   "ratio_at_spp"]
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()

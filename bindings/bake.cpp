@@ -77,6 +77,11 @@ public:
         d["texels"] = s.texels;
         d["covered"] = s.covered;
         d["degenerate_uv_triangles"] = s.degenerateUvTriangles;
+        OMISBakeWork work{};
+        if (!omisGetBakeResultWork(ref_.get(), &work)) raise_pending_error();
+        d["draws"] = work.draws;
+        d["draws_per_texel"] = work.drawsPerTexel;
+        d["shadowed_texels"] = work.shadowedTexels;
         const size_t n = omisGetBakeResultPlan(ref_.get(), nullptr, 0);
         std::string plan(n + 1, '\0');
         omisGetBakeResultPlan(ref_.get(), &plan[0], plan.size());
@@ -296,8 +301,8 @@ void init_bake(py::module_& m) {
                                "estimated relative standard error per texel")
         .def_property_readonly("mask", &BakeResult::mask, "1 where baked, 0 margin or empty")
         .def_property_readonly("stats", &BakeResult::stats,
-                               "time, samples, rays, errors, passes, status, the effect plan, the "
-                               "convergence per pass and the halving time predicted from it")
+                               "time, samples, draws, rays, errors, passes, status, the effect plan, "
+                               "the convergence per pass and the halving time predicted from it")
         .def("write_exr", &BakeResult::write_exr, py::arg("path"),
              "Linear float EXR with channels R, G, B, noise, mask (atomic write).")
         .def("write_png", &BakeResult::write_png, py::arg("path"), py::arg("view") = "Standard",

@@ -232,6 +232,7 @@ class BakeJob:
         units = [u for u in self.units if u.stats is not None]
         covered = sum(u.stats.get("covered", 0) for u in units)
         samples = sum(u.stats.get("samples", 0) for u in units)
+        draws = sum(u.stats.get("draws", 0) for u in units)
         statuses = [u.stats.get("status", "complete") for u in units]
         if "time budget reached" in statuses:
             status = "time budget reached"
@@ -253,6 +254,10 @@ class BakeJob:
             "rays_traced": sum(u.stats.get("rays_traced", 0) for u in units),
             "covered": covered,
             "samples_per_texel": samples / covered if covered else 0.0,
+            # The work behind the samples: texels whose centre sees no light
+            # draw more per sample (README, "Baking").
+            "draws_per_texel": draws / covered if covered else 0.0,
+            "shadowed_texels": sum(u.stats.get("shadowed_texels", 0) for u in units),
             "mean_relative_error": mean_error,
             # A noise threshold measures the error from independent streams;
             # otherwise each texel's one sequence leaves an upper estimate.

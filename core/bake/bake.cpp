@@ -107,6 +107,9 @@ struct PointState {
     std::uint32_t weight = 0;  // samples
     std::uint16_t passes = 0;
     bool done = false;
+    // Draws per count a round (PointLighting::draws_per_count): > 1 where the
+    // texel's centre sees no light, fixed per texel.
+    std::uint8_t draws_per_count = 1;
 };
 
 // A point may stop for the noise target only after this many passes: a
@@ -310,6 +313,7 @@ struct Shaded {
     double value[3];
     double own_variance;      // luminance, independent-draw formula
     StreamEstimates streams;  // when the bake has several streams
+    int draws_per_count;      // PointLighting::draws_per_count
 };
 
 // A point's streams over all passes so far: Σ w·estimate and Σ w per stream
@@ -421,7 +425,7 @@ private:
     int last_pass_rounds_ = 1;  // of the pass that ran last
     bool probe_ = false;           // the first pass is a probe the next one replaces
     bool replace_probe_ = false;   // ... and it ran
-    std::uint64_t replaced_samples_ = 0;  // the probe's, when replaced
+    std::uint64_t replaced_draws_ = 0;  // the probe's, when replaced
     bool last_done_ = true;
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
@@ -525,7 +529,7 @@ bool Baker::keep_going() {
 void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                         std::vector<Shaded>& out) {
     if (!layout_.covered(i) || state_[i].done || cancel_.load(std::memory_order_relaxed)) return;
-    Shaded r{i, {}, 0, {}};
+    Shaded r{i, {}, 0, {}, 1};
     double variance[3], own[3];
     StreamEstimates* streams = tallies_.empty() ? nullptr : &r.streams;
     // The first pass times its set-up and sampling on every
@@ -546,6 +550,7 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
         return;  // keep_going: the bake is being cancelled
     }
     r.own_variance = luminance(Vec3(own[0], own[1], own[2]));
+    r.draws_per_count = shader.draws_per_count();
     out.push_back(r);
     if (progress_ && (shaded_.fetch_add(pass.samples, std::memory_order_relaxed) % 64) <
                          std::size_t(pass.samples))
@@ -566,6 +571,7 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
         PointState& s = state_[r.i];
         ++s.passes;
         s.weight += pass.samples;
+        s.draws_per_count = std::uint8_t(r.draws_per_count);
         const double w = pass.weight > 0 ? pass.weight : double(pass.samples);
         s.mean_weight += w;
         const double weight = w / s.mean_weight;
@@ -931,7 +937,7 @@ void Baker::forget_probe() {
     rate_.reset();
     for (std::size_t i = 0; i < layout_.count; ++i) {
         if (!layout_.covered(i)) continue;
-        replaced_samples_ += state_[i].weight;
+        replaced_draws_ += std::uint64_t(state_[i].weight) * state_[i].draws_per_count;
         state_[i] = PointState{};
         if (!tallies_.empty()) tallies_[i] = StreamTally{};
         for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = 0.f;
@@ -976,6 +982,8 @@ void Baker::write_outputs() {
         result_.mask[i] = 1.f;
         sum_error += err;
         sum_passes += s.passes;
+        stats.samples += s.weight;
+        stats.shadowed_texels += s.draws_per_count > 1;
         stats.max_relative_error = std::max(stats.max_relative_error, err);
         ++n_covered;
     }
@@ -1002,17 +1010,18 @@ void Baker::fill_margin() {
 void Baker::fill_stats() {
     BakeStats& stats = result_.stats;
     for (const PointLighting& s : shaders_) {
-        stats.samples += s.counters.samples;
+        stats.draws += s.counters.samples;
         stats.rays_traced += s.counters.rays;
         stats.mis_systems += s.counters.systems;
     }
-    stats.samples -= std::min(stats.samples, replaced_samples_);  // counts what the values hold
+    stats.draws -= std::min(stats.draws, replaced_draws_);  // counts what the values hold
     stats.status = status_;
     stats.passes = pass_count_;
     stats.texels = layout_.count;
     stats.degenerate_uv_triangles = layout_.coverage.degenerate_uv_triangles;
     stats.overlapping_texels = layout_.coverage.overlapping_texels;
     stats.samples_per_texel = stats.covered ? double(stats.samples) / stats.covered : 0;
+    stats.draws_per_texel = stats.covered ? double(stats.draws) / stats.covered : 0;
     stats.plan = context_.plan.to_string();
     for (std::size_t k = 0; k < settings_.lighting.techniques.size(); ++k) {
         stats.techniques.push_back(settings_.lighting.techniques[k].name());
@@ -1063,7 +1072,8 @@ BakeResult bake(const Scene& scene, const BakeSettings& in, const BakeProgress& 
     validate(scene, in);
     BakeSettings settings = in;
     if (settings.lighting.techniques.empty())
-        default_techniques(scene, settings.lighting.techniques, settings.lighting.samples);
+        default_techniques(scene, settings.lighting.techniques, settings.lighting.samples,
+                           &settings.lighting.shadowed_draws);
     return Baker(scene, settings, progress, start).run();
 }
 

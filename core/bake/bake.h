@@ -56,8 +56,16 @@ struct BakeSettings {
 struct BakeStats {
     BakeStatus status = BakeStatus::Complete;
     double seconds = 0;
-    std::uint64_t samples = 0, rays_traced = 0, mis_systems = 0;
+    // samples: the texels' schedules (`samples` = N: N per texel, rounds of
+    // the techniques' counts). draws: the directions drawn, all techniques:
+    // as many, except that a texel whose centre sees no light's middle point
+    // (shadowed_texels; DirectLightingSettings::shadowed_draws) draws 4× the
+    // counts in each of its rounds. rays_traced: every ray, the extra draws'
+    // and the shadow probe's included.
+    std::uint64_t samples = 0, draws = 0, rays_traced = 0, mis_systems = 0;
     double samples_per_texel = 0;      // mean over covered texels
+    double draws_per_texel = 0;        // mean over covered texels
+    std::size_t shadowed_texels = 0;
     double mean_relative_error = 0;    // estimated standard error / value, covered texels
     double max_relative_error = 0;
     int passes = 0;                    // passes started

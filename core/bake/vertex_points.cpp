@@ -81,6 +81,7 @@ BakeResult corners_to_vertices(const Mesh& mesh, BakeResult corners) {
     stats.covered = covered;
     stats.mean_relative_error = covered ? sum_error / covered : 0;
     stats.samples_per_texel = covered ? double(stats.samples) / covered : 0;
+    stats.draws_per_texel = covered ? double(stats.draws) / covered : 0;
     out.stats = stats;
     return out;
 }

@@ -43,6 +43,11 @@ struct DirectLightingSettings {
     // sample of integrand 0 where the estimator does not use them). false:
     // the general path, which tests compare them with.
     bool fast_paths = true;
+    // Points whose centre sees no integrated light's middle point (a
+    // deterministic probe, kept per texel: the point's draw counts are fixed
+    // before its samples, so estimates stay unbiased) draw this many times
+    // each technique's count a round. 1: no probe.
+    int shadowed_draws = 1;
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
     Receiver receiver;
@@ -229,6 +234,10 @@ public:
     void record_into(AllocationPilot* pilot);
 
     LightingCounters counters;
+    // The last point shaded drew this many times each count a round:
+    // settings.shadowed_draws where its centre is in every light's shadow,
+    // else 1 (a bake reports those texels and their extra draws).
+    int draws_per_count() const;
 
     // What a bake's first pass spends that its later passes do not: the
     // set-up of the tables kept for a point's later passes, beside all of the

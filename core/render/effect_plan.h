@@ -80,7 +80,11 @@ constexpr double kComparablePower = 4.0;
 // `bsdf` when the techniques have it (effect_plan.cpp, minor_world).
 constexpr double kMinorWorldPower = 1.0;
 
+// Texels in every light's shadow draw kShadowedDraws times each count
+// (DirectLightingSettings::shadowed_draws, set through `shadowed_draws` when
+// given) among several comparable local lights.
+constexpr int kShadowedDraws = 4;
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
-                        std::vector<int>& samples);
+                        std::vector<int>& samples, int* shadowed_draws = nullptr);
 
 }  // namespace omis

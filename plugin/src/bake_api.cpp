@@ -162,7 +162,8 @@ OMIS_API void omisCommitBake(OMISBake bake) {
         if (!(s.noise_target >= 0))
             throw std::invalid_argument("noiseTarget: must be ≥ 0 (0 = none)");
         if (b->techniques.empty()) {
-            omis::default_techniques(scene, s.lighting.techniques, s.lighting.samples);
+            omis::default_techniques(scene, s.lighting.techniques, s.lighting.samples,
+                                     &s.lighting.shadowed_draws);
             if (!b->counts.empty())
                 throw std::invalid_argument("counts: given without techniques");
         } else {
@@ -271,6 +272,17 @@ OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats
         out.texels = s.texels;
         out.covered = s.covered;
         out.degenerateUvTriangles = s.degenerate_uv_triangles;
+        return true;
+    });
+}
+
+OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work) {
+    return guarded(false, [&] {
+        const auto& s = checked(result, "result")->result.stats;
+        OMISBakeWork& out = *checked(work, "work");
+        out.draws = s.draws;
+        out.drawsPerTexel = s.draws_per_texel;
+        out.shadowedTexels = s.shadowed_texels;
         return true;
     });
 }

@@ -22,6 +22,7 @@ int main(void) {
     OMISBake bake;
     OMISBakeResult result;
     OMISBakeStats stats;
+    OMISBakeWork work;
     int width = 0, height = 0;
     const float* value;
     FILE* f;
@@ -69,6 +70,11 @@ int main(void) {
     CHECK(omisGetError(NULL) == OMIS_ERROR_INVALID_ARGUMENT);
     CHECK(omisGetBakeResultStats(result, &stats) && stats.covered == 32 * 16 &&
           stats.samplesPerTexel > 0);
+    /* one light, no shadow: every texel draws its schedule's samples, no more */
+    CHECK(omisGetBakeResultWork(result, &work) && work.shadowedTexels == 0 &&
+          work.draws == stats.samples && work.drawsPerTexel == stats.samplesPerTexel);
+    CHECK(!omisGetBakeResultWork(result, NULL));
+    CHECK(omisGetError(NULL) == OMIS_ERROR_INVALID_ARGUMENT);
     CHECK(omisGetBakeResultPlan(result, NULL, 0) > 0);
 
     /* files: a failed write leaves the old file as it was */

@@ -297,6 +297,52 @@ TEST_CASE("samples = N takes exactly N per texel", "[bake]") {
         }
 }
 
+// The work behind the samples: draws counts every direction drawn, so it is
+// N per texel where no texel is shadowed, and 4N more for each texel whose
+// centre sees no light's middle point (shadowed_draws = 4). The scene makes
+// that set known exactly: the unit floor (8² texels, centres at (i + ½)/8)
+// under two small lights about x = 0.5, z = 2 (x ∈ [0.45, 0.55]) and an
+// opaque sheet at z = 1 over x < 0.5. A ray from a texel centre at x to a
+// light point at x_l crosses z = 1 at (x + x_l)/2: below 0.5 for every light
+// point when x ≤ 7/16 (columns 0–3: shadowed), above it when x ≥ 9/16.
+TEST_CASE("draws: N per texel, and exactly 4N where a texel's centre is shadowed", "[bake]") {
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    Scene scene;
+    scene.add_mesh(grid_mesh(2, 0.0, 5, positions, triangles, uvs));
+    const std::vector<float> sheet = {-10, -10, 1, 0.5f, -10, 1, 0.5f, 10, 1, -10, 10, 1};
+    const std::vector<std::uint32_t> sheet_triangles = {0, 1, 2, 0, 2, 3};
+    const std::vector<float> sheet_uvs(12, 0.f);
+    scene.add_mesh(testing::two_triangle_mesh("sheet", sheet, sheet_triangles, sheet_uvs));
+    for (double y : {0.25, 0.65})
+        scene.add_light(make_rect_light(Vec3(0.45, y, 2), Vec3(0, 0.1, 0), Vec3(0.1, 0, 0),
+                                        Vec3(5, 5, 5), false, kPi));
+    scene.commit();
+    constexpr long long kSamples = 48;  // rounds of 1 + 2
+    constexpr int kShadowedColumns = 4, kSize = 8;
+    for (bool progressive : {false, true})  // passes: the probe pass is replaced
+        for (int shadowed_draws : {1, 4}) {
+            BakeSettings s = floor_settings(kSize);
+            s.lighting.samples = {1, 2};
+            s.lighting.shadowed_draws = shadowed_draws;
+            s.samples = kSamples;
+            if (progressive) s.time_budget = 1000;  // never reached
+            const BakeResult r = bake(scene, s);
+            INFO("shadowed_draws " << shadowed_draws << (progressive ? ", passes" : ", one pass"));
+            REQUIRE(r.stats.covered == std::size_t(kSize * kSize));
+            const std::size_t shadowed =
+                shadowed_draws > 1 ? std::size_t(kShadowedColumns * kSize) : 0;
+            CHECK(r.stats.shadowed_texels == shadowed);
+            CHECK(r.stats.samples == std::uint64_t(kSamples) * r.stats.covered);
+            CHECK(r.stats.samples_per_texel == double(kSamples));
+            for (std::uint32_t k : r.samples) CHECK(k == std::uint32_t(kSamples));
+            const std::uint64_t draws =
+                std::uint64_t(kSamples) * (r.stats.covered + 3 * shadowed);
+            CHECK(r.stats.draws == draws);
+            CHECK(r.stats.draws_per_texel == double(draws) / double(r.stats.covered));
+        }
+}
+
 TEST_CASE("a scene without lights bakes black (not NaN) with the asked sample count", "[bake]") {
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;

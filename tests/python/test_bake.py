@@ -58,6 +58,9 @@ def test_lightmap_agrees_with_lambert():
     stats = r.stats
     assert stats["status"] == "complete" and stats["covered"] == n * n
     assert stats["samples_per_texel"] == pytest.approx(64, rel=0.01)
+    # an unoccluded floor: no texel draws more than its schedule's samples
+    assert stats["shadowed_texels"] == 0
+    assert stats["draws"] == stats["samples"] and stats["draws_per_texel"] == stats["samples_per_texel"]
     assert "techniques" in stats["plan"]
 
 

@@ -35,6 +35,19 @@ inline double floor_lambert_footprint(const Scene& scene, const UvCoverage& cov,
     return sum / (n * n);
 }
 
+// Four corners (positions, 4 × 3), two triangles and their corners' UVs
+// (6 × 2) as a mesh; the arrays must outlive the scene it is added to.
+inline MeshInput two_triangle_mesh(const char* name, const std::vector<float>& positions,
+                                   const std::vector<std::uint32_t>& triangles,
+                                   const std::vector<float>& uvs) {
+    MeshInput m;
+    m.name = name;
+    m.positions = ScalarArray::of(positions.data(), 4, 3);
+    m.triangles = IndexArray{triangles.data(), 2, 3};
+    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
+    return m;
+}
+
 // The floor alone: a 2 m square of two triangles (UVs over [0,1]²) under that
 // light, committed. The arrays must outlive the scene (it reads them in place).
 inline void two_triangle_floor(Scene& scene, std::vector<float>& positions,
@@ -44,12 +57,7 @@ inline void two_triangle_floor(Scene& scene, std::vector<float>& positions,
     uvs.clear();
     for (std::uint32_t i : triangles)
         uvs.insert(uvs.end(), {0.5f * (positions[3 * i] + 1), 0.5f * (positions[3 * i + 1] + 1)});
-    MeshInput m;
-    m.name = "floor";
-    m.positions = ScalarArray::of(positions.data(), 4, 3);
-    m.triangles = IndexArray{triangles.data(), 2, 3};
-    m.uvs = ScalarArray::of(uvs.data(), 6, 2);
-    scene.add_mesh(m);
+    scene.add_mesh(two_triangle_mesh("floor", positions, triangles, uvs));
     scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1), Vec3(0, 1, 0), Vec3(1, 0, 0),
                                     Vec3(2, 2, 2), false, kPi));
     scene.commit();

@@ -38,9 +38,9 @@
  *          omisCommitDirectLighting, omisExecuteDirectLighting). */
 #define OMIS_VERSION_MAJOR 0
 #define OMIS_VERSION_MINOR 2
-#define OMIS_VERSION_PATCH 0
+#define OMIS_VERSION_PATCH 1
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
-#define OMIS_VERSION_STRING "0.2.0"
+#define OMIS_VERSION_STRING "0.2.1"
 
 /* Limits of every MIS system: techniques combined, channels per sample. */
 #define OMIS_MAX_TECHNIQUES 32
@@ -387,7 +387,7 @@ typedef enum OMISBakeStatus {
 typedef struct OMISBakeStats {
     OMISBakeStatus status;
     double seconds;
-    uint64_t samples;        /* directions drawn */
+    uint64_t samples;        /* the texels' schedules: samplesPerTexel · covered */
     uint64_t raysTraced;
     double samplesPerTexel;  /* mean over baked texels */
     double meanRelativeError;
@@ -398,6 +398,17 @@ typedef struct OMISBakeStats {
     uint64_t degenerateUvTriangles;
 } OMISBakeStats;
 OMIS_API bool omisGetBakeResultStats(OMISBakeResult result, OMISBakeStats* stats);
+/* The work behind the samples (0.2.1; OMISBakeStats keeps its layout): every
+ * texel takes its schedule's samples, and one whose centre sees no light's
+ * middle point draws 4× each technique's count in every round (the effect
+ * plan's choice among several comparable lights). raysTraced counts every
+ * ray, those texels' extra ones and the probe's included. */
+typedef struct OMISBakeWork {
+    uint64_t draws;          /* directions drawn, all techniques, extra draws included */
+    double drawsPerTexel;    /* mean over baked texels */
+    uint64_t shadowedTexels; /* texels drawing the extra draws */
+} OMISBakeWork;
+OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work);
 
 /* The bake's convergence: one record per completed pass. Passes are taken when
  * a time or noise budget is set ("timeBudget", "noiseTarget"); a bake with a
