@@ -10,7 +10,8 @@
 // --passes 1,1,2,4,8: what a later pass repeats. The receiver's texels (as
 // square footprints) shaded through PointLighting as a bake's passes shade
 // them, in passes of these rounds, against one pass of all of them; the
-// difference per later pass, in rounds of that one pass's sampling.
+// difference per later pass, in rounds of that one pass's sampling. With
+// --profile 1: the passes alone, --reps times (for perf or callgrind).
 //
 // Every figure is the median of R interleaved repetitions within this run;
 // the machine is shared, so read the ratios, not the milliseconds.
@@ -180,6 +181,7 @@ double shade_in_passes(const Scene& scene, int size, const std::vector<int>& sch
     LightingContext context(scene, b.lighting);
     const std::size_t count = std::size_t(size) * size;
     if (context.keeps_texel_tables) context.texel_tables.index_points(count);
+    if (schedule.size() > 1) context.keep_draw_counts(count);
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
     const double texel = 2.0 / size;  // the 2 m receiver; footprints half a texel wide
     int first_round = 0;
@@ -239,6 +241,17 @@ int main(int argc, char** argv) {
         else if (!std::strcmp(argv[i], "--passes") && i + 1 < argc)
             for (const char* p = argv[++i]; *p; p += *p == ',')
                 schedule.push_back(int(std::strtol(p, const_cast<char**>(&p), 10)));
+    }
+    if (!schedule.empty() && profile > 0) {  // the passes alone, for perf or callgrind
+        for (const auto& [name, build] : scenes()) {
+            if (!only.empty() && ("," + only + ",").find("," + name + ",") == std::string::npos)
+                continue;
+            Scene scene;
+            build(scene);
+            scene.commit();
+            for (int r = 0; r < reps; ++r) shade_in_passes(scene, size, schedule);
+        }
+        return 0;
     }
     if (!schedule.empty()) {
         std::printf("passes of");
