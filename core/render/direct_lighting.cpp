@@ -64,6 +64,27 @@ bool tiny_in_solid_angle(const LightingContext::TinyShape& shape, const Vec3& x)
     return shape.area_limit < dot(d, d);
 }
 
+// Adds the seconds from its making to its end (or stop) to *into; with a
+// null `into` it reads no clock (timing that is off costs nothing).
+class ScopedTimer {
+public:
+    explicit ScopedTimer(double* into)
+        : into_(into), start_(into ? Clock::now() : Clock::time_point()) {}
+    ScopedTimer(const ScopedTimer&) = delete;
+    ScopedTimer& operator=(const ScopedTimer&) = delete;
+    ~ScopedTimer() { stop(); }
+    void stop() {
+        if (into_) *into_ += std::chrono::duration<double>(Clock::now() - start_).count();
+        into_ = nullptr;
+    }
+    void discard() { into_ = nullptr; }  // the time so far counts nowhere
+
+private:
+    using Clock = std::chrono::steady_clock;
+    double* into_;
+    Clock::time_point start_;
+};
+
 // Past this many lights the context keeps no TinyShape table: the test then
 // makes each light's record from its Light, which the sample reads anyway —
 // among 100k lights the table's record is one more cache miss per light
@@ -1148,9 +1169,8 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
             restore(*entry, active);
             return;
         }
-    const bool timed = keep && setup_timing_ && setup_timing_->on;
-    const auto start =
-        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
+    ScopedTimer setup(keep && setup_timing_ && setup_timing_->on ? &setup_timing_->kept_setup
+                                                                  : nullptr);
     choose_active(probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
@@ -1166,11 +1186,11 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     // Only where a table was made: selectors' techniques are cheap to find
     // again, and an entry for every texel of a large map would spend the
     // budget on them.
-    if (entry.tables.empty()) return;
+    if (entry.tables.empty()) {
+        setup.discard();  // nothing kept: not the kept tables' set-up
+        return;
+    }
     kept.keep(stream, std::move(entry));
-    if (timed)
-        setup_timing_->kept_setup +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // choose_active's result from a kept entry: the same techniques in the same
@@ -1849,9 +1869,8 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     DeltaSums delta;
     delta.per_round = !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
     const bool by_stream_only = plan.by_stream && !plan.in_whole;
-    const bool timed = setup_timing_ && setup_timing_->on;
-    const auto rounds_start =
-        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
+    ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
+                                                                 : nullptr);
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
@@ -1885,9 +1904,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             }
         }
     }
-    if (timed)
-        setup_timing_->rounds +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - rounds_start).count();
+    rounds_timer.stop();
     light_streams.keep();
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
@@ -2012,13 +2029,9 @@ void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
                           double value[3], double variance[3], const int* counts,
                           double own_variance[3], StreamEstimates* streams,
                           const std::vector<DrawnRounds>* earlier) {
-    const auto start = setup_timing.on ? std::chrono::steady_clock::now()
-                                       : std::chrono::steady_clock::time_point();
+    ScopedTimer timer(setup_timing.on ? &setup_timing.shading : nullptr);
     impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
                  own_variance, streams, earlier);
-    if (setup_timing.on)
-        setup_timing.shading +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void PointLighting::record_into(AllocationPilot* pilot) {
