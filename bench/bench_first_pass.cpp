@@ -7,11 +7,18 @@
 //
 //   omis_bench_first_pass [--size N] [--reps R] [--scenes a,b]
 //
+// --passes 1,1,2,4,8: what a later pass repeats. The receiver's texels (as
+// square footprints) shaded through PointLighting as a bake's passes shade
+// them, in passes of these rounds, against one pass of all of them; the
+// difference per later pass, in rounds of that one pass's sampling. With
+// --profile 1: the passes alone, --reps times (for perf or callgrind).
+//
 // Every figure is the median of R interleaved repetitions within this run;
 // the machine is shared, so read the ratios, not the milliseconds.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 #include <map>
@@ -22,6 +29,11 @@
 #include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
 #include "render/effect_plan.h"
+#include "support/square_footprint.h"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 using namespace omis;
 using Clock = std::chrono::steady_clock;
@@ -86,6 +98,21 @@ std::map<std::string, std::function<void(Scene&)>> scenes() {
         add_box(scene, Vec3(-0.4, 0, 0.35), Vec3(0.2, 0.2, 0.025));
         scene.add_light(make_world_light(Vec3(0.15, 0.2, 0.25)));
     };
+    s["world_window"] = [](Scene& scene) {
+        add_receiver(scene);  // the floor of a closed room, sky through an opening
+        const double h = 1.5;
+        add_box(scene, Vec3(1.05, 0, h / 2), Vec3(0.05, 1.1, h / 2));
+        add_box(scene, Vec3(-1.05, 0, h / 2), Vec3(0.05, 1.1, h / 2));
+        add_box(scene, Vec3(0, 1.05, h / 2), Vec3(1.1, 0.05, h / 2));
+        add_box(scene, Vec3(0, -1.05, h / 2), Vec3(1.1, 0.05, h / 2));
+        add_box(scene, Vec3(-0.525, 0, h + 0.05), Vec3(0.575, 1.1, 0.05));
+        add_box(scene, Vec3(0.825, 0, h + 0.05), Vec3(0.275, 1.1, 0.05));
+        add_box(scene, Vec3(0.3, -0.575, h + 0.05), Vec3(0.25, 0.525, 0.05));
+        add_box(scene, Vec3(0.3, 0.775, h + 0.05), Vec3(0.25, 0.325, 0.05));
+        scene.add_light(make_rect_light(Vec3(-0.65, -0.55, 1.4), Vec3(0, 0.3, 0),
+                                        Vec3(0.3, 0, 0), Vec3(35, 35, 35), false, kPi));
+        scene.add_light(make_world_light(Vec3(5, 6, 8)));
+    };
     s["demo_room"] = [](Scene& scene) {
         add_receiver(scene);  // the floor, 2 m of the room's 6 m
         add_box(scene, Vec3(-0.6, -0.2, 0.74), Vec3(0.8, 0.45, 0.02));
@@ -143,6 +170,60 @@ void print_quality(const std::string& name, const std::function<void(Scene&)>& b
     std::printf("\n");
 }
 
+// The receiver's size² texels as a bake's passes shade them (a tile of 16²
+// texels per task, one PointLighting per thread, texel tables kept), in
+// passes of `schedule` rounds; seconds.
+double shade_in_passes(const Scene& scene, int size, const std::vector<int>& schedule) {
+    BakeSettings b = settings_for(size, 1);
+    default_techniques(scene, b.lighting.techniques, b.lighting.samples);
+    b.lighting.receiver = scene.mesh_receiver(0);
+    const auto t0 = Clock::now();
+    LightingContext context(scene, b.lighting);
+    const std::size_t count = std::size_t(size) * size;
+    if (context.keeps_texel_tables) context.texel_tables.index_points(count);
+    if (schedule.size() > 1) context.keep_draw_counts(count);
+    tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
+    const double texel = 2.0 / size;  // the 2 m receiver; footprints half a texel wide
+    int first_round = 0;
+    for (int rounds : schedule) {
+        tbb::parallel_for(tbb::blocked_range2d<int>(0, size, 16, 0, size, 16),
+                          [&](const tbb::blocked_range2d<int>& r) {
+            PointLighting& shader = shaders.local();
+            for (int y = r.rows().begin(); y != r.rows().end(); ++y)
+                for (int x = r.cols().begin(); x != r.cols().end(); ++x) {
+                    const omis::testing::SquareFootprint f(
+                        Vec3(-1 + (x + 0.5) * texel, -1 + (y + 0.5) * texel, 0), texel / 4);
+                    double value[3], variance[3], own[3];
+                    shader.shade(std::size_t(y) * size + x, first_round, rounds, f.centre(), &f,
+                                 value, variance, nullptr, own);
+                }
+        });
+        first_round += rounds;
+    }
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// --passes: per scene, the schedule against one pass of as many rounds, and
+// one round alone (the set-up); interleaved repetitions, medians.
+void print_passes(const std::string& name, const std::function<void(Scene&)>& build, int size,
+                  int reps, const std::vector<int>& schedule) {
+    Scene scene;
+    build(scene);
+    scene.commit();
+    int total = 0;
+    for (int r : schedule) total += r;
+    std::vector<double> one_round, one_pass, passes;
+    for (int r = 0; r < reps; ++r) {
+        one_round.push_back(shade_in_passes(scene, size, {1}));
+        one_pass.push_back(shade_in_passes(scene, size, {total}));
+        passes.push_back(shade_in_passes(scene, size, schedule));
+    }
+    const double t1 = median(one_round), tn = median(one_pass), tp = median(passes);
+    const double round = (tn - t1) / (total - 1);
+    std::printf("%-15s %8.2f %8.2f %8.2f %8.2f %10.2f\n", name.c_str(), 1e3 * t1, 1e3 * tn,
+                1e3 * tp, 1e3 * round, (tp - tn) / (schedule.size() - 1) / round);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -150,12 +231,39 @@ int main(int argc, char** argv) {
     std::string only;
     long long profile = 0;  // --profile S: only bakes of S samples (for perf record)
     bool quality = false;   // --quality: error per sample instead of time
+    std::vector<int> schedule;  // --passes: rounds per pass
     for (int i = 1; i < argc; ++i) {
         if (!std::strcmp(argv[i], "--size") && i + 1 < argc) size = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--reps") && i + 1 < argc) reps = std::atoi(argv[++i]);
         else if (!std::strcmp(argv[i], "--scenes") && i + 1 < argc) only = argv[++i];
         else if (!std::strcmp(argv[i], "--profile") && i + 1 < argc) profile = std::atoll(argv[++i]);
         else if (!std::strcmp(argv[i], "--quality")) quality = true;
+        else if (!std::strcmp(argv[i], "--passes") && i + 1 < argc)
+            for (const char* p = argv[++i]; *p; p += *p == ',')
+                schedule.push_back(int(std::strtol(p, const_cast<char**>(&p), 10)));
+    }
+    if (!schedule.empty() && profile > 0) {  // the passes alone, for perf or callgrind
+        for (const auto& [name, build] : scenes()) {
+            if (!only.empty() && ("," + only + ",").find("," + name + ",") == std::string::npos)
+                continue;
+            Scene scene;
+            build(scene);
+            scene.commit();
+            for (int r = 0; r < reps; ++r) shade_in_passes(scene, size, schedule);
+        }
+        return 0;
+    }
+    if (!schedule.empty()) {
+        std::printf("passes of");
+        for (int r : schedule) std::printf(" %d", r);
+        std::printf(" rounds: %d² texels, optimal-direct, median of %d\n"
+                    "%-15s %8s %8s %8s %8s %10s\n", size, reps, "scene", "1 round",
+                    "1 pass", "passes", "round", "per pass");
+        for (const auto& [name, build] : scenes())
+            if (only.empty() || ("," + only + ",").find("," + name + ",") != std::string::npos)
+                print_passes(name, build, size, reps, schedule);
+        std::printf("(milliseconds; per pass: what each later pass adds, in rounds)\n");
+        return 0;
     }
     std::printf("first pass vs later rounds: %d² lightmap, optimal-direct, median of %d\n"
                 "%-15s %8s %8s %8s %8s %8s %8s %8s %7s\n",

@@ -64,6 +64,27 @@ bool tiny_in_solid_angle(const LightingContext::TinyShape& shape, const Vec3& x)
     return shape.area_limit < dot(d, d);
 }
 
+// Adds the seconds from its making to its end (or stop) to *into; with a
+// null `into` it reads no clock (timing that is off costs nothing).
+class ScopedTimer {
+public:
+    explicit ScopedTimer(double* into)
+        : into_(into), start_(into ? Clock::now() : Clock::time_point()) {}
+    ScopedTimer(const ScopedTimer&) = delete;
+    ScopedTimer& operator=(const ScopedTimer&) = delete;
+    ~ScopedTimer() { stop(); }
+    void stop() {
+        if (into_) *into_ += std::chrono::duration<double>(Clock::now() - start_).count();
+        into_ = nullptr;
+    }
+    void discard() { into_ = nullptr; }  // the time so far counts nowhere
+
+private:
+    using Clock = std::chrono::steady_clock;
+    double* into_;
+    Clock::time_point start_;
+};
+
 // Past this many lights the context keeps no TinyShape table: the test then
 // makes each light's record from its Light, which the sample reads anyway —
 // among 100k lights the table's record is one more cache miss per light
@@ -83,7 +104,16 @@ struct LightChoice {
 
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
-        : p_(context), counters(counters), choices_(context.settings.techniques.size()) {}
+        : p_(context), counters(counters), choices_(context.settings.techniques.size()) {
+        // Where each table technique's counts lie among a point's kept ones
+        // (LightingContext::keep_draw_counts' layout).
+        std::size_t cells = 0;
+        for (const Technique& t : p_.settings.techniques) {
+            const bool table = !t.bsdf && !p_.selector(t.selection);
+            kept_counts_at_.push_back(table ? cells : ~std::size_t(0));
+            if (table) cells += std::size_t(p_.settings.streams) * p_.integrated.size();
+        }
+    }
 
     void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, const int* counts, double* value, double* variance,
@@ -182,7 +212,30 @@ struct PointLighting::Impl {
     // and the slot's own sequence once made.
     std::vector<std::uint32_t> taken_scratch_;
     std::vector<std::optional<ScrambledSobol>> sequences_scratch_;
-    std::vector<std::optional<ScrambledSobol>> technique_sequences_;  // shade()'s, per call
+    // Per table technique, the offset of its counts among a point's kept
+    // ones (LightingContext::draw_counts); ~0 for the others.
+    std::vector<std::size_t> kept_counts_at_;
+    // Each (technique, stream) sequence of the point being shaded, and the
+    // delta lights' per stream (technique index techniques.size()): made at
+    // its first use in a call, not at every round or by every user — its
+    // seed hashes were ~190 of a sample's ~5,150 instructions on an
+    // emission_world-like bake (callgrind). Same seeds: bit-identical results.
+    std::vector<std::optional<ScrambledSobol>> technique_sequences_;
+    std::uint64_t sequence_base_ = 0;  // the point's (shade)
+    // `count` sequences, none made yet: clears only their flags (assigning
+    // nullopt copied whole ~100-byte objects, ~5 % of a later pass's
+    // repeated work).
+    static void forget_sequences(std::vector<std::optional<ScrambledSobol>>& sequences,
+                                 std::size_t count) {
+        sequences.resize(count);
+        for (std::optional<ScrambledSobol>& s : sequences) s.reset();
+    }
+    const ScrambledSobol& technique_sequence(std::size_t k, int s) {
+        const std::size_t K = std::size_t(p_.settings.streams);
+        std::optional<ScrambledSobol>& built = technique_sequences_[k * K + std::size_t(s)];
+        if (!built) built.emplace(sequence_base_ ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
+        return *built;
+    }
     // shade's pieces: how its rounds fall into the streams, the estimators
     // they go to, the delta lights' sums, and the point's estimate from them.
     struct RoundPlan {
@@ -1155,9 +1208,8 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
             restore(*entry, active);
             return;
         }
-    const bool timed = keep && setup_timing_ && setup_timing_->on;
-    const auto start =
-        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
+    ScopedTimer setup(keep && setup_timing_ && setup_timing_->on ? &setup_timing_->kept_setup
+                                                                  : nullptr);
     choose_active(probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
@@ -1174,11 +1226,11 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     // Only where a table was made: selectors' techniques are cheap to find
     // again, and an entry for every texel of a large map would spend the
     // budget on them.
-    if (entry.tables.empty() && p_.settings.shadowed_draws <= 1) return;
+    if (entry.tables.empty() && p_.settings.shadowed_draws <= 1) {
+        setup.discard();  // nothing kept: not the kept tables' set-up
+        return;
+    }
     kept.keep(stream, std::move(entry));
-    if (timed)
-        setup_timing_->kept_setup +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // choose_active's result from a kept entry: the same techniques in the same
@@ -1570,15 +1622,18 @@ void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_f
 // penumbrae (edge texels) 0.97 → 0.57; shared_image (1.6 cm texels) 0.99 →
 // 0.93 (issue 9; bench/results/error_sources.txt). Unbiased: a light's sequence
 // is independent of the selections, so its next point is uniform whatever
-// the count, in position as in shape. A later pass continues every count: the table is the same at
-// every pass, so the selections of earlier rounds are replayed (cheap: no
-// rays, one table lookup each).
+// the count, in position as in shape. A later pass continues every count:
+// the table is the same at every pass, so the counts are those the point's
+// last call left (LightingContext::draw_counts, where kept), else the
+// selections of earlier rounds are replayed (cheap per draw: no rays, one
+// table lookup each; but every pass replays them all).
 class PointLighting::Impl::LightStreams {
 public:
-    LightStreams(Impl& impl, std::uint64_t base, const Active& active)
+    LightStreams(Impl& impl, std::uint64_t base, std::uint64_t point, const Active& active)
         : impl_(impl), base_(base), lights_(table_slots(impl)),
           streams_(impl.p_.settings.streams), taken_(impl.taken_scratch_),
-          sequences_(impl.sequences_scratch_) {
+          sequences_(impl.sequences_scratch_), kept_(impl.p_.draw_counts.of(point)),
+          active_(active) {
         const auto& techniques = impl.p_.settings.techniques;
         // Counts only where a technique draws from a table: zeroing them per
         // point for 16k tree-drawn lights cost 40 % of an emissive mesh's bake.
@@ -1586,23 +1641,31 @@ public:
                          [&](int k) { return uses_table(k); }))
             return;
         taken_.assign(techniques.size() * std::size_t(streams_) * lights_, 0);
-        sequences_.assign(taken_.size(), std::nullopt);
+        forget_sequences(sequences_, taken_.size());
         for (int k : active.lights) {
             if (!uses_table(k)) continue;
             for (int s = 0; s < streams_; ++s) {
-                if (impl.draw_start(k, s) == 0) continue;  // a first pass: nothing to replay
-                const ScrambledSobol seq = technique_sequence(k, s);
-                for (std::uint32_t i = 0; i < impl.draw_start(k, s); ++i)
+                const std::uint32_t start = impl.draw_start(k, s);
+                if (start == 0) continue;  // a first pass: nothing to count
+                const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), s);
+                for (std::uint32_t i = restore(k, s, start); i < start; ++i)
                     ++count(k, s, slot(k, seq, i));
             }
         }
     }
     bool uses_table(int k) const {
-        const Technique& t = impl_.p_.settings.techniques[k];
-        return !t.bsdf && !impl_.p_.selector(t.selection);
+        return impl_.kept_counts_at_[std::size_t(k)] != ~std::size_t(0);
     }
-    ScrambledSobol technique_sequence(int k, int s) const {
-        return ScrambledSobol(base_ ^ mix64(std::uint64_t(k) * streams_ + std::uint64_t(s) + 1));
+    // Leaves the counts for the point's next call (after all of this one's draws).
+    void keep() const {
+        if (!kept_) return;
+        for (int k : active_.lights)
+            if (uses_table(k))
+                for (int s = 0; s < streams_; ++s) {
+                    std::uint32_t* to = kept(k, s);
+                    const std::size_t n = table_size(k);
+                    for (std::size_t i = 0; i < n; ++i) to[i] = taken_[cell(k, s, int(i))];
+                }
     }
     // Technique k's draw `index` of stream s: its light and shape point.
     TableDraw draw(int k, int s, const ScrambledSobol& seq, std::uint32_t index) {
@@ -1625,6 +1688,27 @@ public:
     }
 
 private:
+    // Technique k's kept counts of stream s (a slot per integrated light).
+    std::uint32_t* kept(int k, int s) const {
+        const std::size_t lights = impl_.p_.integrated.size();
+        return kept_ + impl_.kept_counts_at_[std::size_t(k)] + std::size_t(s) * lights;
+    }
+    std::size_t table_size(int k) const {
+        return std::min(impl_.choices_[k].lights.size(), impl_.p_.integrated.size());
+    }
+    // The kept counts of technique k's stream s, where they count no more
+    // than the `start` draws before this call (then a prefix of them): how
+    // many they count, from which the rest are counted. 0 where none are kept.
+    std::uint32_t restore(int k, int s, std::uint32_t start) {
+        if (!kept_) return 0;
+        const std::uint32_t* from = kept(k, s);
+        const std::size_t n = table_size(k);
+        std::uint64_t counted = 0;
+        for (std::size_t i = 0; i < n; ++i) counted += from[i];
+        if (counted > start) return 0;  // ahead of this call (a probe's): count afresh
+        for (std::size_t i = 0; i < n; ++i) count(k, s, int(i)) = from[i];
+        return std::uint32_t(counted);
+    }
     // The longest table's size, not the scene's light count: the counts are
     // cleared per point, and a scene of many emitter triangles (drawn through
     // the light tree, no table) would otherwise clear a vector that long at
@@ -1650,6 +1734,8 @@ private:
     int streams_;
     std::vector<std::uint32_t>& taken_;  // per technique, stream and table slot
     std::vector<std::optional<ScrambledSobol>>& sequences_;  // each slot's own, per cell
+    std::uint32_t* kept_;  // the point's kept counts, or null
+    const Active& active_;
 };
 
 // How a call's rounds fall into the streams, and whether each stream's
@@ -1818,14 +1904,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // positions vary, take one position per round from a sequence of their own.
     const int K = p_.settings.streams;
     const std::uint64_t base = mix64(p_.settings.seed ^ mix64(stream));
-    auto sequence = [&](std::size_t k, int s) {
-        return ScrambledSobol(base ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
-    };
+    const std::size_t delta_group = p_.settings.techniques.size();
+    sequence_base_ = base;
+    forget_sequences(technique_sequences_, (delta_group + 1) * std::size_t(K));
     set_draw_starts(first_round, earlier);
     if (m > 1)
         for (std::uint32_t& start : draw_start_) start *= std::uint32_t(m);
-    LightStreams light_streams(*this, base, active);
-    const std::size_t delta_group = p_.settings.techniques.size();
+    LightStreams light_streams(*this, base, stream, active);
     const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
     set_up_estimators(active, plan, counts, counts_in != nullptr || m > 1, all, per);
@@ -1835,18 +1920,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     DeltaSums delta;
     delta.per_round = !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
     const bool by_stream_only = plan.by_stream && !plan.in_whole;
-    // Each (technique, stream) sequence is built once per call, not at every
-    // round: its seed hashes were ~190 of a sample's ~5,150 instructions on an
-    // emission_world-like bake (callgrind). Same seeds: bit-identical results.
-    technique_sequences_.assign(delta_group * std::size_t(K), std::nullopt);
-    const bool timed = setup_timing_ && setup_timing_->on;
-    const auto rounds_start =
-        timed ? std::chrono::steady_clock::now() : std::chrono::steady_clock::time_point();
+    ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
+                                                                 : nullptr);
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
         if (delta.per_round) {
-            const ScrambledSobol seq = sequence(delta_group, s);
+            const ScrambledSobol& seq = technique_sequence(delta_group, s);
             SurfacePoint at = centre;
             if (footprint) {
                 double fu, fv;
@@ -1861,10 +1941,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
         if (plan.in_whole && !active.all.empty()) set_stream(all, s);
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
-            std::optional<ScrambledSobol>& built =
-                technique_sequences_[std::size_t(k) * std::size_t(K) + std::size_t(s)];
-            if (!built) built.emplace(sequence(std::size_t(k), s));
-            const ScrambledSobol& seq = *built;
+            const ScrambledSobol& seq = technique_sequence(std::size_t(k), s);
             const bool table = light_streams.uses_table(k);
             for (int j = 0; j < counts[k]; ++j) {
                 const std::uint32_t index =
@@ -1878,9 +1955,8 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             }
         }
     }
-    if (timed)
-        setup_timing_->rounds +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - rounds_start).count();
+    rounds_timer.stop();
+    light_streams.keep();
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;
@@ -1966,6 +2042,12 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         });
 }
 
+void LightingContext::keep_draw_counts(std::size_t points) {
+    std::size_t tables = 0;  // light techniques that draw from per-point tables
+    for (const Technique& t : settings.techniques) tables += !t.bsdf && !selector(t.selection);
+    draw_counts.index_points(points, tables * std::size_t(settings.streams) * integrated.size());
+}
+
 const LightSelector* LightingContext::selector(LightSelection selection) const {
     switch (selection) {
         case LightSelection::Uniform:
@@ -1998,13 +2080,9 @@ void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
                           double value[3], double variance[3], const int* counts,
                           double own_variance[3], StreamEstimates* streams,
                           const std::vector<DrawnRounds>* earlier) {
-    const auto start = setup_timing.on ? std::chrono::steady_clock::now()
-                                       : std::chrono::steady_clock::time_point();
+    ScopedTimer timer(setup_timing.on ? &setup_timing.shading : nullptr);
     impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
                  own_variance, streams, earlier);
-    if (setup_timing.on)
-        setup_timing.shading +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 int PointLighting::draws_per_count() const { return impl_->draws_per_count_; }

@@ -16,6 +16,7 @@
 #include "render/receiver.h"
 #include "render/light_selection.h"
 #include "render/scene.h"
+#include "render/texel_draws.h"
 #include "render/texel_tables.h"
 
 namespace omis {
@@ -120,6 +121,14 @@ public:
     // at every pass than to keep; direct_lighting.cpp). A bake then need not
     // index its points in texel_tables.
     bool keeps_texel_tables = true;
+    // Per point (PointLighting::shade's stream), where its table draws stand
+    // (render/texel_draws.h), so that a later call continues from there:
+    // kept by a job that shades points 0 … points − 1 in several passes
+    // (keep_draw_counts). 4 bytes per point, light technique that draws from
+    // a per-point table, stream and integrated light; none past
+    // TexelDrawCounts::kByteBudget.
+    mutable TexelDrawCounts draw_counts;
+    void keep_draw_counts(std::size_t points);
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes

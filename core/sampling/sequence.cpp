@@ -86,13 +86,15 @@ std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
     return reverse_bits(laine_karras(reverse_bits(x), seed));
 }
 
-ScrambledSobol::ScrambledSobol(std::uint64_t seed) : seed_(seed) {
-    for (std::uint32_t g = 0; g < kCachedGroups; ++g)
-        for (std::uint32_t salt = 0; salt < 3; ++salt) cached_[g][salt] = group_seed(seed, g, salt);
-}
+ScrambledSobol::ScrambledSobol(std::uint64_t seed) : seed_(seed) {}
 
-std::uint32_t ScrambledSobol::seed(std::uint32_t group, std::uint32_t salt) const {
-    return group < kCachedGroups ? cached_[group][salt] : group_seed(seed_, group, salt);
+std::uint32_t ScrambledSobol::first_seed(std::uint32_t group, std::uint32_t salt) const {
+    const std::uint32_t s = group_seed(seed_, group, salt);
+    if (group < kCachedGroups) {
+        cached_[group][salt] = s;
+        ready_ |= 1u << (group * kSalts + salt);
+    }
+    return s;
 }
 
 double ScrambledSobol::get_1d(std::uint32_t index, std::uint32_t group) const {
@@ -113,8 +115,8 @@ void ScrambledSobol::get_4d(std::uint32_t index, std::uint32_t group, double out
     const std::uint32_t i = owen_scramble(index, seed(group, 0));
     out[0] = to_unit(scrambled_dim0(i, seed(group, 1)));
     out[1] = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
-    out[2] = to_unit(owen_scramble(sobol_dim2(i), group_seed(seed_, group, 3)));
-    out[3] = to_unit(owen_scramble(sobol_dim3(i), group_seed(seed_, group, 4)));
+    out[2] = to_unit(owen_scramble(sobol_dim2(i), seed(group, 3)));
+    out[3] = to_unit(owen_scramble(sobol_dim3(i), seed(group, 4)));
 }
 
 }  // namespace omis

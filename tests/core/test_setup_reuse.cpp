@@ -72,3 +72,65 @@ TEST_CASE("set-up reuse: a point shades the same after other points as on its ow
             }
     }
 }
+
+TEST_CASE("draw counts kept between passes: a later pass shades as one that counts again",
+          "[texel_tables]") {
+    // A bake keeps where each texel's table draws stand (LightingContext::
+    // keep_draw_counts) so that a later pass continues from there instead of
+    // re-counting the earlier rounds' selections. The kept counts must give
+    // the bits the re-count gives: after one-round and longer passes, after a
+    // probe pass that the next pass replaces (it starts again at round 0),
+    // after allocated passes of other counts (DrawnRounds), and for a call
+    // that goes back to rounds drawn before (the kept counts are then ahead
+    // of it), in every stream.
+    Scene scene;
+    add_scene(scene);
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, 0, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05}, {Vec3(1.3, 1.3, 0), 0.08},
+        {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(-0.4, -0.3, 0), 0.02}};
+    struct Call {
+        int first_round, rounds;
+        bool allocated;  // counts {3, 2} instead of the settings' {1, 1}
+    };
+    // The probe (round 0) is replaced by [0, 2); then [2, 4), [4, 8), two
+    // allocated calls, one of the settings' counts again, and [4, 6) again.
+    const std::vector<Call> calls = {{0, 1, false}, {0, 2, false},  {2, 2, false},
+                                     {4, 4, false}, {8, 2, true},   {10, 1, true},
+                                     {11, 3, false}, {4, 2, false}};
+    const int allocated_counts[2] = {3, 2};
+    for (const char* light_technique :
+         {"uniform/solid-angle", "unoccluded/area", "defensive/solid-angle"})
+        for (int streams : {1, 4}) {
+            DirectLightingSettings s;
+            for (const char* name : {light_technique, "bsdf"})
+                s.techniques.push_back(*parse_technique(name));
+            s.samples = {1, 1};
+            s.strategy = Strategy::OptimalDirect;
+            s.streams = streams;
+            s.seed = 9;
+            LightingContext keeping(scene, s), counting(scene, s);
+            keeping.keep_draw_counts(texels.size());
+            REQUIRE(keeping.draw_counts.bytes() > 0);
+            PointLighting continued(keeping), recounted(counting);
+            std::vector<DrawnRounds> earlier;
+            for (const Call& call : calls) {
+                // The calls before this one's rounds (a call from round 0 replaces the probe).
+                while (!earlier.empty() && earlier.back().first_round >= call.first_round)
+                    earlier.pop_back();
+                const int* counts = call.allocated ? allocated_counts : nullptr;
+                for (std::size_t t = 0; t < texels.size(); ++t) {
+                    const SquareFootprint& f = texels[t];
+                    double a[3], a_var[3], b[3], b_var[3];
+                    continued.shade(t, call.first_round, call.rounds, f.centre(), &f, a, a_var,
+                                    counts, nullptr, nullptr, &earlier);
+                    recounted.shade(t, call.first_round, call.rounds, f.centre(), &f, b, b_var,
+                                    counts, nullptr, nullptr, &earlier);
+                    INFO(light_technique << ", " << streams << " streams, rounds from "
+                                         << call.first_round << ", texel " << t);
+                    CHECK(same_bits(a, b));
+                    CHECK(same_bits(a_var, b_var));
+                }
+                earlier.push_back({call.first_round, call.rounds, counts});
+            }
+        }
+}
