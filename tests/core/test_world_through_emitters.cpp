@@ -50,6 +50,28 @@ double exact(const Vec3& x, double emitter_radiance, double world_radiance) {
     return world_radiance * (1 - emitter - plate) + emitter_radiance * emitter;
 }
 
+// The plan's default techniques at x, balance and optimal-direct: the mean of
+// the copies within kSigmas standard errors of `expected`.
+void check_unbiased(const Scene& scene, const Vec3& x, double expected, std::uint64_t seed) {
+    std::vector<Technique> techniques;
+    std::vector<int> samples;
+    default_techniques(scene, techniques, samples);
+    for (Strategy s : {Strategy::Balance, Strategy::OptimalDirect}) {
+        DirectLightingSettings settings;
+        settings.techniques = techniques;
+        settings.samples = samples;
+        settings.rounds = 8;
+        settings.strategy = s;
+        settings.seed = seed;
+        const testing::PointCopies e =
+            testing::light_point_copies(scene, x, Vec3(0, 0, 1), settings, kCopies);
+        INFO("x = (" << x.x << ", " << x.y << "), " << strategy_name(s) << ", mean " << e.mean
+                     << ", expected " << expected << ", σ " << e.standard_error);
+        CHECK(e.finite);
+        CHECK(std::abs(e.mean - expected) <= kSigmas * e.standard_error);
+    }
+}
+
 }  // namespace
 
 TEST_CASE("a minor world seen through emissive triangles: the plan", "[direct][world]") {
@@ -84,27 +106,10 @@ TEST_CASE("a minor world seen through emissive triangles: unbiased", "[direct][w
     const double emitter = 6.0, world = 0.2;
     Scene scene;
     build(scene, emitter, world);
-    const Vec3 up(0, 0, 1);
     // Under the emitter; beside it (the plate hides part of the world); under
     // the plate, next to the emitter's edge.
-    std::vector<Technique> techniques;
-    std::vector<int> samples;
-    default_techniques(scene, techniques, samples);
-    for (const Vec3& x : {Vec3(0.2, 0, 0), Vec3(0.6, 0.2, 0), Vec3(-0.5, 0, 0)}) {
-        for (Strategy s : {Strategy::Balance, Strategy::OptimalDirect}) {
-            DirectLightingSettings settings;
-            settings.techniques = techniques;
-            settings.samples = samples;
-            settings.rounds = 8;
-            settings.strategy = s;
-            settings.seed = 5;
-            const testing::PointCopies e =
-                testing::light_point_copies(scene, x, up, settings, kCopies);
-            INFO("x = (" << x.x << ", " << x.y << "), " << strategy_name(s));
-            CHECK(e.finite);
-            CHECK(std::abs(e.mean - exact(x, emitter, world)) <= kSigmas * e.standard_error);
-        }
-    }
+    for (const Vec3& x : {Vec3(0.2, 0, 0), Vec3(0.6, 0.2, 0), Vec3(-0.5, 0, 0)})
+        check_unbiased(scene, x, exact(x, emitter, world), 5);
 }
 
 TEST_CASE("a minor world seen through emissive triangles around a closed box: unbiased",
@@ -153,19 +158,6 @@ TEST_CASE("a minor world seen through emissive triangles around a closed box: un
     // Under the box; beside it (x and y faces seen too); under the emitter.
     for (const Vec3& x : {Vec3(-0.6, 0.05, 0), Vec3(-0.3, 0.5, 0), Vec3(0.2, 0, 0)}) {
         const double e = polygon_irradiance(x, up, kEmitter) / kPi;
-        const double expected = world * (1 - e - box_faces_seen(x)) + emitter * e;
-        for (Strategy s : {Strategy::Balance, Strategy::OptimalDirect}) {
-            DirectLightingSettings settings;
-            settings.techniques = techniques;
-            settings.samples = samples;
-            settings.rounds = 8;
-            settings.strategy = s;
-            settings.seed = 7;
-            const testing::PointCopies c = testing::light_point_copies(scene, x, up, settings, kCopies);
-            INFO("x = (" << x.x << ", " << x.y << "), " << strategy_name(s) << ", mean " << c.mean
-                         << ", expected " << expected << ", σ " << c.standard_error);
-            CHECK(c.finite);
-            CHECK(std::abs(c.mean - expected) <= kSigmas * c.standard_error);
-        }
+        check_unbiased(scene, x, world * (1 - e - box_faces_seen(x)) + emitter * e, 7);
     }
 }
