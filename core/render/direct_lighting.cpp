@@ -1381,8 +1381,9 @@ void PointLighting::Impl::take_world_sample(const Active& active, const SurfaceP
 // emit] dω. A direction whose first hit is on mesh m lies in the outline of
 // m's bounding box, which from x outside the box is the union of the box
 // faces turned toward x (disjoint). A face F drawn with probability W_F/W
-// (W_F a positive weight, W their sum) and ω uniform in it:
-//     B̂ = c(ω) Ω_F W / W_F [the first hit along ω is on F's mesh],
+// (W_F a positive weight, W their sum) and ω toward a point uniform on its
+// area A_F (density d²/(A_F cos_F) in solid angle, d the point's distance):
+//     B̂ = c(ω) (A_F cos_F / d²) W / W_F [the first hit along ω is on F's mesh],
 // E[B̂] = Σ_F ∫_F c(ω)[first hit on mesh(F)] dω = B: each hidden direction
 // counts once, through its own mesh's box. Unbiased; the sample enters the
 // world's estimator as L_w (A − B̂) with density 1 (its only technique).
@@ -1427,8 +1428,7 @@ void PointLighting::Impl::take_occluder_sample(const Active& active, const Surfa
             f = {Vec3(corner[0], corner[1], corner[2]), Vec3(eu[0], eu[1], eu[2]),
                  Vec3(ev[0], ev[1], ev[2]), box.mesh};
             // The face's solid angle about its centre (area · cos / d²): any
-            // positive weight keeps B̂ unbiased; this one costs no spherical
-            // rectangle for the faces not drawn.
+            // positive weight keeps B̂ unbiased; this one needs no trigonometry.
             const Vec3 d = f.corner + 0.5 * (f.edge_u + f.edge_v) - p.x;
             const double d2 = dot(d, d);
             weight[count] = eu[b] * ev[c] * std::abs(x[a] - corner[a]) / (d2 * std::sqrt(d2));
