@@ -31,6 +31,17 @@ struct EffectPlan {
     // that do not emit, and the light technique integrates the emitters'
     // occlusion of the world. See world_seen_through_emitters (effect_plan.cpp).
     bool world_through_emitters = false;
+    // The world seen through emitters, around few surfaces that do not emit
+    // (world_around_few_occluders, effect_plan.cpp): the world's part is
+    // L_w·(1 − B), B the share of the cosine-weighted hemisphere whose first
+    // hit is such a surface, and `bsdf`'s draws estimate B by directions drawn
+    // toward the occluders' bounding boxes instead of over the hemisphere.
+    // One box per mesh that does not emit (world space, axis-aligned).
+    struct OccluderBox {
+        std::uint32_t mesh = 0;
+        Vec3 lo, hi;
+    };
+    std::vector<OccluderBox> world_occluders;
     // Many delta lights: their sum is estimated by drawing delta_samples of
     // them per round from a light tree instead of one shadow ray each.
     bool sample_delta_lights = false;
@@ -79,6 +90,11 @@ constexpr double kComparablePower = 4.0;
 // times the other integrated lights' together is a minor light: left to
 // `bsdf` when the techniques have it (effect_plan.cpp, minor_world).
 constexpr double kMinorWorldPower = 1.0;
+// A world seen through emitters with at most this many meshes that do not
+// emit (the receivers count) has its occluders drawn by their bounding boxes
+// (EffectPlan::world_occluders): each draw then makes a spherical rectangle
+// of every box face turned toward the point.
+constexpr int kFewWorldOccluders = 4;
 
 // Texels in every light's shadow draw kShadowedDraws times each count
 // (DirectLightingSettings::shadowed_draws, set through `shadowed_draws` when

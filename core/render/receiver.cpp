@@ -41,6 +41,18 @@ double Receiver::lambert_ratio(double cos_theta) const {
     return 1.0;
 }
 
+// With μ = cosθ, ∫_H (μ/π) ratio(μ) dω = 2 ∫_0^1 μ ratio(μ) dμ. Principled:
+// 2 ∫ μ (1 − F/2 + r (1 + μ) F) dμ, F = (1 − μ)⁵, by the Beta integrals
+// ∫ μ (1 − μ)⁵ = 1/42 and ∫ μ² (1 − μ)⁵ = 1/168: 1 − 1/42 + r·5/84.
+double Receiver::hemisphere_integral() const {
+    switch (model) {
+        case ReceiverModel::Lambert: return 1.0;
+        case ReceiverModel::PrincipledDiffuse: return 1.0 - 1.0 / 42.0 + roughness * 5.0 / 84.0;
+        case ReceiverModel::OrenNayar: return lambert_ratio(1.0);  // a constant ratio
+    }
+    return 1.0;
+}
+
 std::string Receiver::name() const {
     std::ostringstream s;
     switch (model) {

@@ -31,6 +31,9 @@ struct Receiver {
     bool is_lambert() const { return model == ReceiverModel::Lambert; }
     // The closure relative to Lambert's cosθ/π at cos_theta ∈ (0, 1].
     double lambert_ratio(double cos_theta) const;
+    // ∫ over the hemisphere of the closure (receiver_cosine_factor) dω, what a
+    // constant radiance of 1 from every direction gives (Lambert: 1).
+    double hemisphere_integral() const;
     std::string name() const;  // "lambert", "principled(0.5)", "oren-nayar(1)"
 };
 
