@@ -144,7 +144,11 @@ struct PointLighting::Impl {
     std::vector<int> scaled_counts_;  // shade's counts × draws_per_count
     int draws_per_count_ = 1;         // the last point shaded's (PointLighting::draws_per_count)
     class Probes;
-    void choose_active(Probes& probes, const Footprint* footprint, Active& active);
+    void choose_active(std::uint64_t point, Probes& probes, const Footprint* footprint,
+                       Active& active);
+    // settings.shadowed_draws where centre_in_shadow, else 1; from the
+    // context's shadow_verdicts where the job keeps them.
+    int draws_per_count_at(std::uint64_t point, const SurfacePoint& centre);
     bool centre_in_shadow(const SurfacePoint& p);
     // choose_active through the context's texel tables: with `keep`, a point
     // shaded before (same stream) takes its techniques and tables from there,
@@ -1109,8 +1113,8 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     return it->second;
 }
 
-void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footprint,
-                                        Active& active) {
+void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
+                                        const Footprint* footprint, Active& active) {
     // Light choice (which lights, with what probability) is made once per
     // point and kept for every sample of the footprint: per-point tables over
     // the centre and corners together (choose_lights_over); selectors at the
@@ -1132,8 +1136,7 @@ void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footpri
                               t.selection == LightSelection::Defensive));
     }
     set_anchor(irradiance_tables ? footprint : nullptr);
-    if (p_.settings.shadowed_draws > 1 && centre_in_shadow(probes[0]))
-        active.draws_per_count = p_.settings.shadowed_draws;
+    if (p_.settings.shadowed_draws > 1) active.draws_per_count = draws_per_count_at(point, probes[0]);
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
         if (!t.bsdf) {
@@ -1158,6 +1161,14 @@ void PointLighting::Impl::choose_active(Probes& probes, const Footprint* footpri
 // again at every pass: keeping an entry per texel for its verdict cost more
 // (128², 8 spp, CPU: area 1.3-1.5x, no texel shadowed; demo_room 1.65x).
 // Kept tables keep it.
+int PointLighting::Impl::draws_per_count_at(std::uint64_t point, const SurfacePoint& centre) {
+    std::uint8_t* kept = point < p_.shadow_verdicts.size() ? &p_.shadow_verdicts[point] : nullptr;
+    if (kept && *kept) return *kept;
+    const int m = centre_in_shadow(centre) ? p_.settings.shadowed_draws : 1;
+    if (kept) *kept = std::uint8_t(m);
+    return m;
+}
+
 bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
     for (std::uint32_t l : p_.integrated) {
         const auto s = sample_light(p_.scene.lights()[l], ShapeSampler::SolidAngle, p.x, p.n,
@@ -1217,7 +1228,7 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
         }
     ScopedTimer setup(keep && setup_timing_ && setup_timing_->on ? &setup_timing_->kept_setup
                                                                   : nullptr);
-    choose_active(probes, footprint, active);
+    choose_active(stream, probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
     entry.mask = active.mask;
@@ -2145,6 +2156,11 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
             return !t.bsdf && t.selection != LightSelection::Uniform &&
                    t.selection != LightSelection::Power;
         });
+}
+
+void LightingContext::keep_shadow_verdicts(std::size_t points) {
+    if (settings.shadowed_draws > 1 && settings.shadowed_draws <= 255)  // a byte each
+        shadow_verdicts.assign(points, 0);
 }
 
 void LightingContext::keep_draw_counts(std::size_t points) {

@@ -129,6 +129,14 @@ public:
     // TexelDrawCounts::kByteBudget.
     mutable TexelDrawCounts draw_counts;
     void keep_draw_counts(std::size_t points);
+    // Per point, where settings.shadowed_draws > 1: its draws per count (1, or
+    // shadowed_draws where its centre sees no light's middle), 0 before its
+    // first call. The probe behind it is deterministic, so a job of several
+    // passes keeps the verdict (keep_shadow_verdicts) and traces the probe's
+    // rays once per point instead of once per pass where texel tables are not
+    // kept. 1 byte per point.
+    mutable std::vector<std::uint8_t> shadow_verdicts;
+    void keep_shadow_verdicts(std::size_t points);
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes
