@@ -35,7 +35,9 @@
  * the library it was built for (the Python module does).
  *   0.2.0: omisDirectLighting's argument list became the OMISDirectLighting
  *          object (omisNewDirectLighting, omisSetDirectLighting*,
- *          omisCommitDirectLighting, omisExecuteDirectLighting). */
+ *          omisCommitDirectLighting, omisExecuteDirectLighting).
+ *   0.2.1: omisGetBakeResultWork (OMISBakeWork: draws, drawsPerTexel,
+ *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules. */
 #define OMIS_VERSION_MAJOR 0
 #define OMIS_VERSION_MINOR 2
 #define OMIS_VERSION_PATCH 1
