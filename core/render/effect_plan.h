@@ -32,7 +32,7 @@ struct EffectPlan {
     // occlusion of the world. See world_seen_through_emitters (effect_plan.cpp).
     bool world_through_emitters = false;
     // The world seen through emitters, around few surfaces that do not emit
-    // (world_around_few_occluders, effect_plan.cpp): the world's part is
+    // (world_occluders, effect_plan.cpp): the world's part is
     // L_w·(1 − B), B the share of the cosine-weighted hemisphere whose first
     // hit is such a surface, and `bsdf`'s draws estimate B by directions drawn
     // toward the occluders' bounding boxes instead of over the hemisphere.
@@ -92,8 +92,8 @@ constexpr double kComparablePower = 4.0;
 constexpr double kMinorWorldPower = 1.0;
 // A world seen through emitters with at most this many meshes that do not
 // emit (the receivers count) has its occluders drawn by their bounding boxes
-// (EffectPlan::world_occluders): each draw then makes a spherical rectangle
-// of every box face turned toward the point.
+// (EffectPlan::world_occluders): each draw then weighs every box face turned
+// toward the point and draws a point on one of them by area.
 constexpr int kFewWorldOccluders = 4;
 
 // Texels in every light's shadow draw kShadowedDraws times each count

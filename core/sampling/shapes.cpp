@@ -167,17 +167,12 @@ double TriangleLight::solid_angle(const Vec3& x) const {
 std::optional<LightSample> TriangleLight::sample_area(const Vec3& x, double u1,
                                                       double u2) const {
     const Point2 b = sample_uniform_triangle(u1, u2);
-    // The normal and the area from one cross product (area() forms it again).
-    const Vec3 c = cross(p1 - p0, p2 - p0);
-    const double twice_area = length(c);
-    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y, c / twice_area,
-                              0.5 * twice_area);
+    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y,
+                              normalize(cross(p1 - p0, p2 - p0)), area());
 }
 
 double TriangleLight::pdf_area(const Vec3& x, const Vec3& w) const {
-    const Vec3 c = cross(p1 - p0, p2 - p0);
-    const double twice_area = length(c);
-    return area_pdf(intersect(x, w), w, c / twice_area, 0.5 * twice_area);
+    return area_pdf(intersect(x, w), w, normalize(cross(p1 - p0, p2 - p0)), area());
 }
 
 std::optional<LightSample> TriangleLight::sample_solid_angle(const Vec3& x, double u1,
