@@ -1155,12 +1155,10 @@ void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
     }
 }
 
-// Whether no integrated light's middle point (a solid-angle draw at u = ½, ½)
-// is seen from p: deterministic, so a draw count chosen by it is fixed per
-// texel before any of its samples. Where tables are cheap (not kept) it runs
-// again at every pass: keeping an entry per texel for its verdict cost more
-// (128², 8 spp, CPU: area 1.3-1.5x, no texel shadowed; demo_room 1.65x).
-// Kept tables keep it.
+// The verdict is kept in the context's shadow_verdicts (a byte a texel) where
+// the job keeps them, else probed again: the probe is deterministic. (A
+// TexelTables entry per texel for it cost more: 128², 8 spp, CPU: area
+// 1.3-1.5x with no texel shadowed, demo_room 1.65x.)
 int PointLighting::Impl::draws_per_count_at(std::uint64_t point, const SurfacePoint& centre) {
     std::uint8_t* kept = point < p_.shadow_verdicts.size() ? &p_.shadow_verdicts[point] : nullptr;
     if (kept && *kept) return *kept;
@@ -1169,6 +1167,9 @@ int PointLighting::Impl::draws_per_count_at(std::uint64_t point, const SurfacePo
     return m;
 }
 
+// Whether no integrated light's middle point (a solid-angle draw at u = ½, ½)
+// is seen from p: deterministic, so a draw count chosen by it is fixed per
+// texel before any of its samples.
 bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
     for (std::uint32_t l : p_.integrated) {
         const auto s = sample_light(p_.scene.lights()[l], ShapeSampler::SolidAngle, p.x, p.n,
@@ -1224,6 +1225,8 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     if (keep)
         if (const TexelTables::Entry* entry = kept.find(stream)) {
             restore(*entry, active);
+            if (p_.settings.shadowed_draws > 1)
+                active.draws_per_count = draws_per_count_at(stream, centre);
             return;
         }
     ScopedTimer setup(keep && setup_timing_ && setup_timing_->on ? &setup_timing_->kept_setup
@@ -1233,7 +1236,6 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     TexelTables::Entry entry;
     entry.mask = active.mask;
     entry.light_mask = active.light_mask;
-    entry.draws_per_count = active.draws_per_count;
     auto uses_table = [&](int k) { return !p_.selector(p_.settings.techniques[k].selection); };
     // One allocation of the exact size (no regrowth; bytes_of counts capacity).
     entry.tables.reserve(std::size_t(
@@ -1244,7 +1246,7 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     // Only where a table was made: selectors' techniques are cheap to find
     // again, and an entry for every texel of a large map would spend the
     // budget on them.
-    if (entry.tables.empty() && p_.settings.shadowed_draws <= 1) {
+    if (entry.tables.empty()) {
         setup.discard();  // nothing kept: not the kept tables' set-up
         return;
     }
@@ -1256,7 +1258,6 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
 void PointLighting::Impl::restore(const TexelTables::Entry& kept, Active& active) {
     active.mask = kept.mask;
     active.light_mask = kept.light_mask;
-    active.draws_per_count = kept.draws_per_count;
     for (int k : p_.techniques) {
         const std::uint64_t bit = std::uint64_t(1) << k;
         if (kept.mask & bit) active.all.push_back(k);

@@ -37,7 +37,6 @@ public:
     };
     struct Entry {
         std::uint64_t mask = 0, light_mask = 0;  // active techniques (bit k)
-        int draws_per_count = 1;                 // PointLighting's Active
         std::vector<Table> tables;               // table techniques only
     };
 
