@@ -51,15 +51,15 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.y0_ = dot(d, r.ey_);
     r.y1_ = r.y0_ + r.H_;
     r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
-    r.r0_ = std::hypot(r.x0_, r.z_);
+    r.r0_ = std::sqrt(r.x0_ * r.x0_ + r.z_ * r.z_);
     r.cos_phi0_ = r.z_ / r.r0_;  // φ0 = atan2(x0, z): the azimuth of the edge at x0
     r.sin_phi0_ = r.x0_ / r.r0_;
     const Vec3 near0{r.x0_, r.y0_, -r.z_}, near1{r.x0_, r.y1_, -r.z_};  // sub_solid_angle's a, d
     r.la_ = length(near0);
     r.ld_ = length(near1);
     r.ad_ = dot(near0, near1);
-    double hx, hy, slope_far;
-    r.half_angle_vector(r.W_, hx, hy, &slope_far);
+    double hx, hy;
+    r.half_angle_vector(r.W_, hx, hy, r.far_lengths_);
     r.omega_ = 2.0 * std::atan2(hy, hx);
     if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
     // The inverse δ(u1)'s slopes at both ends (in units of dphi per u1):
@@ -68,6 +68,7 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     // Carlson), so the first guess stays inside [0, dphi]; an edge seen
     // edge-on (dΩ/dφ = 0: an infinite slope, or 0/0) takes the cap.
     const double slope_near = r.y1_ / r.ld_ - r.y0_ / r.la_;
+    const double slope_far = r.y1_ / r.far_lengths_[1] - r.y0_ / r.far_lengths_[0];
     const double scale = r.omega_ / r.dphi_;
     r.guess_slope0_ = std::min(3.0, scale / slope_near);
     r.guess_slope1_ = std::min(3.0, scale / slope_far);
@@ -121,7 +122,7 @@ double SphericalRect::sub_solid_angle(double w) const {
     return 2.0 * std::atan2(y, x);
 }
 
-void SphericalRect::half_angle_vector(double w, double& x, double& y, double* slope) const {
+void SphericalRect::half_angle_vector(double w, double& x, double& y, double* bc_lengths) const {
     // a and d (the edge at x0) are the same at every w: their lengths and a·d
     // are kept (make), as Newton evaluates this a few times per sample.
     const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
@@ -136,8 +137,10 @@ void SphericalRect::half_angle_vector(double w, double& x, double& y, double* sl
     // gives π.
     y = std::max(0.0, num * (den1 + den2));
     x = den1 * den2 - num * num;
-    // h = cos of the angle to ey of the far corners b and c: y_b/|b|, y_c/|c|.
-    if (slope) *slope = y1_ / lc - y0_ / lb;
+    if (bc_lengths) {
+        bc_lengths[0] = lb;
+        bc_lengths[1] = lc;
+    }
 }
 
 double SphericalRect::first_guess(double u1) const {
@@ -166,8 +169,11 @@ DirSample SphericalRect::sample(double u1, double u2) const {
     for (int it = 0; it < 100; ++it) {
         double c, unused_sin;
         turn(cd, sd, c, unused_sin);
-        double x, y, dg;  // dg: dΩ/dφ, exact
-        half_angle_vector(width_at(delta, sd, c), x, y, &dg);
+        double x, y, bc[2];
+        half_angle_vector(width_at(delta, sd, c), x, y, bc);
+        // dΩ/dφ = h1 − h0, exact: h = cos of the angle to ey of the
+        // corners b and c, y/|b| and y/|c|.
+        const double dg = y1_ / bc[1] - y0_ / bc[0];
         const double r = std::sqrt(x * x + y * y);
         const double g = r > 0 ? 2.0 * (y * ct - x * st) / r : -target;
         if (g == 0) break;
@@ -203,7 +209,9 @@ DirSample SphericalRect::sample(double u1, double u2) const {
 
 Vec3 SphericalRect::corner_direction(int i, int j) const {
     // u1 = i puts φ on the edge x0 + i·W, u2 = j puts h at y0 + j·H.
-    return normalize(ex_ * (x0_ + i * W_) + ey_ * (j ? y1_ : y0_) - ez_ * z_);
+    // Its length, kept by make(), is the same in the rectangle's frame.
+    const double len = i ? far_lengths_[j] : (j ? ld_ : la_);
+    return (ex_ * (x0_ + i * W_) + ey_ * (j ? y1_ : y0_) - ez_ * z_) / len;
 }
 
 double SphericalRect::pdf(const Vec3& w) const {

@@ -50,8 +50,8 @@ public:
 private:
     double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
     // Ω/2 of [x0, x0+w] × [y0, y1] as the angle of (cos, sin) ∝ (x, y), y ≥ 0.
-    // slope (if asked): dΩ/dφ at the edge x0 + w, h1 − h0.
-    void half_angle_vector(double w, double& x, double& y, double* slope = nullptr) const;
+    // bc_lengths (if asked): |b|, |c| of the far corners (x0 + w, y0), (x0 + w, y1).
+    void half_angle_vector(double w, double& x, double& y, double* bc_lengths = nullptr) const;
     // Newton's first δ for u1 (the Hermite cubic of make()'s end slopes).
     double first_guess(double u1) const;
     // x(φ0+δ) − x0, from sin δ and cos_phi = cos(φ0+δ).
@@ -65,6 +65,7 @@ private:
     double x0_ = 0, y0_ = 0, y1_ = 0, W_ = 0, H_ = 0, z_ = 0;  // z_ = distance to plane
     double cos_phi0_ = 1, sin_phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
     double la_ = 0, ld_ = 0, ad_ = 0;  // |a|, |d|, a·d of sub_solid_angle's fixed corners
+    double far_lengths_[2] = {0, 0};  // |b|, |c| at w = W: the corners at x0 + W
     double guess_slope0_ = 1, guess_slope1_ = 1;  // dδ/du1 / dphi at u1 = 0, 1 (capped)
 };
 
