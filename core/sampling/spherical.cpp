@@ -51,15 +51,27 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.y0_ = dot(d, r.ey_);
     r.y1_ = r.y0_ + r.H_;
     r.dphi_ = std::atan2(r.z_ * r.W_, r.x0_ * (r.x0_ + r.W_) + r.z_ * r.z_);
-    r.r0_ = std::hypot(r.x0_, r.z_);
+    r.r0_ = std::sqrt(r.x0_ * r.x0_ + r.z_ * r.z_);
     r.cos_phi0_ = r.z_ / r.r0_;  // φ0 = atan2(x0, z): the azimuth of the edge at x0
     r.sin_phi0_ = r.x0_ / r.r0_;
     const Vec3 near0{r.x0_, r.y0_, -r.z_}, near1{r.x0_, r.y1_, -r.z_};  // sub_solid_angle's a, d
     r.la_ = length(near0);
     r.ld_ = length(near1);
     r.ad_ = dot(near0, near1);
-    r.omega_ = r.sub_solid_angle(r.W_);
+    double hx, hy;
+    r.half_angle_vector(r.W_, hx, hy, r.far_lengths_);
+    r.omega_ = 2.0 * std::atan2(hy, hx);
     if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
+    // The inverse δ(u1)'s slopes at both ends (in units of dphi per u1):
+    // Ω/(dphi · dΩ/dφ), with dΩ/dφ = h1 − h0 at the edges x0 and x0 + W.
+    // Capped at 3, the Hermite cubic through them is monotone (Fritsch &
+    // Carlson), so the first guess stays inside [0, dphi]; an edge seen
+    // edge-on (dΩ/dφ = 0: an infinite slope, or 0/0) takes the cap.
+    const double slope_near = r.y1_ / r.ld_ - r.y0_ / r.la_;
+    const double slope_far = r.y1_ / r.far_lengths_[1] - r.y0_ / r.far_lengths_[0];
+    const double scale = r.omega_ / r.dphi_;
+    r.guess_slope0_ = std::min(3.0, scale / slope_near);
+    r.guess_slope1_ = std::min(3.0, scale / slope_far);
     return r;
 }
 
@@ -73,10 +85,36 @@ double SphericalRect::width_at(double delta, double sin_delta, double c) const {
 void SphericalRect::rotate(double delta, double& sin_delta, double& cos_phi,
                            double& sin_phi) const {
     sin_delta = std::sin(delta);
-    const double cos_delta = std::cos(delta);
+    turn(std::cos(delta), sin_delta, cos_phi, sin_phi);
+}
+
+void SphericalRect::turn(double cos_delta, double sin_delta, double& cos_phi,
+                         double& sin_phi) const {
     cos_phi = cos_phi0_ * cos_delta - sin_phi0_ * sin_delta;
     sin_phi = sin_phi0_ * cos_delta + cos_phi0_ * sin_delta;
 }
+
+namespace {
+
+// cos and sin of δ + step (= next) from those of δ. Newton's steps after the
+// first are tiny: there the rotation by `step` as its Taylor series (to step⁵
+// in sin, step⁴ in cos: the first terms left out are below 1e-20 for
+// |step| ≤ 1e-3) replaces a sincos.
+void advance_angle(double step, double next, double& cos_a, double& sin_a) {
+    if (!(std::abs(step) <= 1e-3)) {
+        cos_a = std::cos(next);
+        sin_a = std::sin(next);
+        return;
+    }
+    const double s2 = step * step;
+    const double sin_step = step * (1.0 - s2 / 6.0 * (1.0 - s2 / 20.0));
+    const double cos_step = 1.0 - s2 / 2.0 * (1.0 - s2 / 12.0);
+    const double c = cos_a * cos_step - sin_a * sin_step;
+    sin_a = sin_a * cos_step + cos_a * sin_step;
+    cos_a = c;
+}
+
+}  // namespace
 
 double SphericalRect::sub_solid_angle(double w) const {
     double x, y;
@@ -84,7 +122,7 @@ double SphericalRect::sub_solid_angle(double w) const {
     return 2.0 * std::atan2(y, x);
 }
 
-void SphericalRect::half_angle_vector(double w, double& x, double& y) const {
+void SphericalRect::half_angle_vector(double w, double& x, double& y, double* bc_lengths) const {
     // a and d (the edge at x0) are the same at every w: their lengths and a·d
     // are kept (make), as Newton evaluates this a few times per sample.
     const Vec3 a{x0_, y0_, -z_}, b{x0_ + w, y0_, -z_}, c{x0_ + w, y1_, -z_}, d{x0_, y1_, -z_};
@@ -99,6 +137,20 @@ void SphericalRect::half_angle_vector(double w, double& x, double& y) const {
     // gives π.
     y = std::max(0.0, num * (den1 + den2));
     x = den1 * den2 - num * num;
+    if (bc_lengths) {
+        bc_lengths[0] = lb;
+        bc_lengths[1] = lc;
+    }
+}
+
+double SphericalRect::first_guess(double u1) const {
+    // The cubic Hermite through δ(0) = 0 and δ(1) = dphi with the slopes of
+    // make(): exact to third order for small rectangles, where the guess
+    // u1·dphi was off by the slopes' difference.
+    const double t = u1, t2 = t * t, t3 = t2 * t;
+    const double f = (t3 - 2 * t2 + t) * guess_slope0_ + (3 * t2 - 2 * t3) +
+                     (t3 - t2) * guess_slope1_;
+    return std::clamp(f, 0.0, 1.0) * dphi_;
 }
 
 double SphericalRect::h_at(double cos_phi, double y) const {
@@ -112,17 +164,20 @@ DirSample SphericalRect::sample(double u1, double u2) const {
     // step (|g/2| < π always: Ω and the target lie in [0, 2π)).
     const double target = u1 * omega_;
     const double ct = std::cos(0.5 * target), st = std::sin(0.5 * target);
-    double lo = 0, hi = dphi_, delta = u1 * dphi_;
+    double lo = 0, hi = dphi_, delta = first_guess(u1);
+    double cd = std::cos(delta), sd = std::sin(delta);
     for (int it = 0; it < 100; ++it) {
-        double sd, c, unused_sin;
-        rotate(delta, sd, c, unused_sin);
-        double x, y;
-        half_angle_vector(width_at(delta, sd, c), x, y);
+        double c, unused_sin;
+        turn(cd, sd, c, unused_sin);
+        double x, y, bc[2];
+        half_angle_vector(width_at(delta, sd, c), x, y, bc);
+        // dΩ/dφ = h1 − h0, exact: h = cos of the angle to ey of the
+        // corners b and c, y/|b| and y/|c|.
+        const double dg = y1_ / bc[1] - y0_ / bc[0];
         const double r = std::sqrt(x * x + y * y);
         const double g = r > 0 ? 2.0 * (y * ct - x * st) / r : -target;
         if (g == 0) break;
         (g < 0 ? lo : hi) = delta;
-        const double dg = h_at(c, y1_) - h_at(c, y0_);  // dΩ/dφ, exact
         double next = delta - g / dg;
         // Where δ already misses u1 by at most 1e-9 (|g| ≤ 1e-9 Ω), the
         // Newton step from it is taken without another evaluation: 3.0
@@ -130,16 +185,18 @@ DirSample SphericalRect::sample(double u1, double u2) const {
         // 0.8× the time of a draw (worst u1 error unchanged, 2e-10), and where
         // Newton's quadratic convergence fails u1 is still met to 1e-9 (a
         // rectangle edge-on 1e-7 off its plane: the sampler test's inversion
-        // check).
+        // check). From first_guess, 2.0 evaluations per sample on the race's
+        // square light (2.8 from u1·dphi).
         const bool newton = next > lo && next < hi;
         if (!newton) next = 0.5 * (lo + hi);
         const bool done = (newton && std::abs(g) <= 1e-9 * omega_) ||
                           std::abs(next - delta) <= 1e-13 * dphi_ || hi - lo <= 1e-15 * dphi_;
+        advance_angle(next - delta, next, cd, sd);
         delta = next;
         if (done) break;
     }
-    double sd, cp, sp;
-    rotate(delta, sd, cp, sp);
+    double cp, sp;
+    turn(cd, sd, cp, sp);
     const double h0 = h_at(cp, y0_), h1 = h_at(cp, y1_);
     const double hv = std::clamp(h0 + u2 * (h1 - h0), -1.0, 1.0);
     const double cv = std::sqrt(std::max(0.0, (1.0 - hv) * (1.0 + hv)));
@@ -152,7 +209,9 @@ DirSample SphericalRect::sample(double u1, double u2) const {
 
 Vec3 SphericalRect::corner_direction(int i, int j) const {
     // u1 = i puts φ on the edge x0 + i·W, u2 = j puts h at y0 + j·H.
-    return normalize(ex_ * (x0_ + i * W_) + ey_ * (j ? y1_ : y0_) - ez_ * z_);
+    // Its length, kept by make(), is the same in the rectangle's frame.
+    const double len = i ? far_lengths_[j] : (j ? ld_ : la_);
+    return (ex_ * (x0_ + i * W_) + ey_ * (j ? y1_ : y0_) - ez_ * z_) / len;
 }
 
 double SphericalRect::pdf(const Vec3& w) const {

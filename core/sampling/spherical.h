@@ -31,7 +31,8 @@ struct DirSample {
 // rectangle left of it has solid angle u1·Ω, then h = cos(angle to edge_v) uniform.
 // The closed-form inversion of the paper loses all digits for tiny or near-plane
 // rectangles; here the first coordinate is found by safeguarded Newton on a stable
-// solid-angle function whose derivative is exact (dΩ/dφ = h1 − h0).
+// solid-angle function whose derivative is exact (dΩ/dφ = h1 − h0), from a
+// cubic Hermite guess through that derivative at both edges.
 class SphericalRect {
 public:
     // Empty when x lies in the rectangle's plane or the edges are not perpendicular.
@@ -49,17 +50,23 @@ public:
 private:
     double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
     // Ω/2 of [x0, x0+w] × [y0, y1] as the angle of (cos, sin) ∝ (x, y), y ≥ 0.
-    void half_angle_vector(double w, double& x, double& y) const;
+    // bc_lengths (if asked): |b|, |c| of the far corners (x0 + w, y0), (x0 + w, y1).
+    void half_angle_vector(double w, double& x, double& y, double* bc_lengths = nullptr) const;
+    // Newton's first δ for u1 (the Hermite cubic of make()'s end slopes).
+    double first_guess(double u1) const;
     // x(φ0+δ) − x0, from sin δ and cos_phi = cos(φ0+δ).
     double width_at(double delta, double sin_delta, double cos_phi) const;
     // sin δ, cos(φ0+δ) and sin(φ0+δ) from one sincos of δ: φ0 itself (an
     // atan2 per shape) is never formed.
     void rotate(double delta, double& sin_delta, double& cos_phi, double& sin_phi) const;
+    void turn(double cos_delta, double sin_delta, double& cos_phi, double& sin_phi) const;
     double h_at(double cos_phi, double y) const;
     Vec3 ex_, ey_, ez_;  // ez points from the plane toward x
     double x0_ = 0, y0_ = 0, y1_ = 0, W_ = 0, H_ = 0, z_ = 0;  // z_ = distance to plane
     double cos_phi0_ = 1, sin_phi0_ = 0, dphi_ = 0, r0_ = 0, omega_ = 0;
     double la_ = 0, ld_ = 0, ad_ = 0;  // |a|, |d|, a·d of sub_solid_angle's fixed corners
+    double far_lengths_[2] = {0, 0};  // |b|, |c| at w = W: the corners at x0 + W
+    double guess_slope0_ = 1, guess_slope1_ = 1;  // dδ/du1 / dphi at u1 = 0, 1 (capped)
 };
 
 // The triangle (p0, p1, p2) seen from x: Arvo's two steps (sub-triangle p0 p1 C' of

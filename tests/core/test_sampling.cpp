@@ -79,6 +79,17 @@ std::vector<Config> planar_configs() {
     };
 }
 
+// x 1e-9 under a rect's corner: the light touches the receiver there (Ω ≈ π/2;
+// the rect's Newton solve starts at an edge seen from its own plane). For the
+// polygons only: the ellipse's bounding box touches there, the ellipse does not.
+Config touching_corner_config() {
+    Config touching{"touching at a corner, 1e-9 off plane", {}, {0, 0, 1}, {0.5, 0.4, 1e-9},
+                    {0.5, 0, 0}, {0, 0.4, 0}};
+    touching.heavy_tailed = true;
+    touching.near_plane = true;
+    return touching;
+}
+
 constexpr int K = 8;  // cells per parameter
 
 // Projected area (onto the unit-height plane along n) of a polygon given by offsets
@@ -484,7 +495,9 @@ PolygonUnderTest<TriangleLight, SphericalTriangle> triangle_under_test(const Con
 
 TEST_CASE("rectangle and triangle samplers", "[sampling]") {
     int rect_seed = 1000, triangle_seed = 2000;
-    for (const Config& c : planar_configs()) {
+    std::vector<Config> configs = planar_configs();
+    configs.push_back(touching_corner_config());
+    for (const Config& c : configs) {
         INFO("config " << c.name);
         check_polygon_samplers(rect_under_test(c), c, rect_seed);
         const auto triangle = triangle_under_test(c);
