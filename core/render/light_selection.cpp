@@ -75,6 +75,11 @@ LightSelector::Bounds box_of(std::initializer_list<Vec3> points) {
 
 }  // namespace
 
+double rescale_within(double u, double lo, double width) {
+    const double r = (u - lo) / width;
+    return r > 0 ? std::min(r, std::nextafter(1.0, 0.0)) : 0.0;  // NaN (no width): 0
+}
+
 // pbrt-v4's LightBounds::Importance: power over squared distance, times the
 // cosine bounds at the emitter (θ' = θw − θo − θb must stay within θe) and at
 // the receiver (θi − θb below the horizon gives nothing). θb bounds the angle
@@ -566,13 +571,15 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
     if (ids_.empty()) return std::nullopt;
     u = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
     if (kind_ == Kind::Uniform) {
-        const std::size_t i = std::min(std::size_t(u * double(ids_.size())), ids_.size() - 1);
-        return SelectedLight{ids_[i], 1.0 / double(ids_.size())};
+        const double n = double(ids_.size());
+        const std::size_t i = std::min(std::size_t(u * n), ids_.size() - 1);
+        return SelectedLight{ids_[i], 1.0 / n, rescale_within(u * n, double(i), 1.0)};
     }
     if (kind_ == Kind::Power) {
         const std::size_t i = std::min<std::size_t>(
             std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin(), ids_.size() - 1);
-        return SelectedLight{ids_[i], probability_[i]};
+        const double lo = i > 0 ? cdf_[i - 1] : 0.0;
+        return SelectedLight{ids_[i], probability_[i], rescale_within(u, lo, cdf_[i] - lo)};
     }
     // Tree: an unbounded light or the tree (where it reaches), uniformly;
     // then down the tree.
@@ -580,9 +587,10 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
     if (choices == 0) return std::nullopt;
     const std::size_t pick = std::min(std::size_t(u * double(choices)), choices - 1);
-    if (pick < unbounded_.size()) return SelectedLight{unbounded_[pick], 1.0 / double(choices)};
+    u = rescale_within(u * double(choices), double(pick), 1.0);
+    if (pick < unbounded_.size())
+        return SelectedLight{unbounded_[pick], 1.0 / double(choices), u};
     double pmf = 1.0 / double(choices);
-    u = std::min(u * double(choices) - double(pick), std::nextafter(1.0, 0.0));
     std::uint32_t node = 0;
     double scratch[kWidth];
     for (;;) {
@@ -595,7 +603,7 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
         double below = 0;
         while (i + 1 < links.count && !(u < below + p[i] && p[i] > 0)) below += p[i++];
         while (!(p[i] > 0) && i > 0) below -= p[--i];
-        u = std::clamp((u - below) / p[i], 0.0, std::nextafter(1.0, 0.0));
+        u = rescale_within(u, below, p[i]);
         pmf *= p[i];
         std::uint32_t light = ~0u;
         if (links.is_leaf & (1u << i)) {
@@ -613,11 +621,13 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
                 std::ptrdiff_t(begin), std::ptrdiff_t(end) - 1));
             pmf *= share_in(position, begin, end);
             light = order_light_[position];
+            u = rescale_within(target, order_cdf_[position],
+                               order_cdf_[position + 1] - order_cdf_[position]);
         }
         if (light != ~0u) {
             if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
             if (memo) memo->drawn = light, memo->drawn_pmf = pmf;
-            return SelectedLight{light, pmf};
+            return SelectedLight{light, pmf, u};
         }
         node = links.index[i];
     }

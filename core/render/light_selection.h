@@ -33,7 +33,15 @@ namespace omis {
 struct SelectedLight {
     std::uint32_t light = 0;  // index into the light list the selector was built on
     double pmf = 0;
+    // The selection's uniform u rescaled within the chosen light's share of
+    // [0, 1): given the choice, uniform on [0, 1) and independent of it, so
+    // the light's shape draw may take it as a coordinate (the points that
+    // choose one light then keep the stratification of u's sequence).
+    double rest = 0;
 };
+
+// (u − lo) / width in [0, 1): u's place within a share [lo, lo + width).
+double rescale_within(double u, double lo, double width);
 
 class LightSelector {
 public:

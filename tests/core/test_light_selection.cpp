@@ -101,6 +101,39 @@ TEST_CASE("selection pmfs sum to 1 and match drawing frequencies", "[selection]"
     }
 }
 
+TEST_CASE("a selection's rest is uniform on [0, 1) and independent of the light chosen",
+          "[selection]") {
+    // The shape draw takes SelectedLight::rest as a coordinate: given the
+    // light, it must be uniform. Pearson's chi-square over (light, quarter of
+    // [0, 1) the rest falls in) against N · pmf / 4 (pooled below 5), at the
+    // shared checker's significance kAlpha.
+    const std::vector<Light> lights = mixed_lights();
+    const std::vector<std::uint32_t> ids = all_ids(lights.size());
+    const Vec3 x(2, 0.5, 1.5), n = normalize(Vec3(1, 0, 1));
+    constexpr int kQuarters = 4;
+    for (auto kind : kKinds) {
+        INFO("kind " << int(kind));
+        const LightSelector s(kind, lights, ids, 10.0);
+        const int N = 200000;
+        std::vector<double> count(lights.size() * kQuarters);
+        Pcg32 rng(5, 3);
+        for (int i = 0; i < N; ++i) {
+            const auto pick = s.sample(x, n, rng.next_double());
+            REQUIRE(pick);
+            REQUIRE(pick->rest >= 0.0);
+            REQUIRE(pick->rest < 1.0);
+            count[pick->light * kQuarters + int(pick->rest * kQuarters)] += 1;
+        }
+        std::vector<double> observed, expected;
+        for (std::uint32_t l : ids)
+            for (int q = 0; q < kQuarters; ++q) {
+                observed.push_back(count[l * kQuarters + q]);
+                expected.push_back(N * s.pmf(x, n, l) / kQuarters);
+            }
+        CHECK(testing::chi_square_pvalue(observed, expected) > testing::kAlpha);
+    }
+}
+
 namespace {
 
 // Does the light send anything to (x, n)? For delta lights exactly; for the
