@@ -54,8 +54,8 @@ void merge_cones(LightSelector::Bounds& a, const LightSelector::Bounds& b) {
 LightSelector::Bounds merge(LightSelector::Bounds a, const LightSelector::Bounds& b) {
     if (!(b.power > 0)) return a;
     if (!(a.power > 0)) return b;
-    a.lo = {std::min(a.lo.x, b.lo.x), std::min(a.lo.y, b.lo.y), std::min(a.lo.z, b.lo.z)};
-    a.hi = {std::max(a.hi.x, b.hi.x), std::max(a.hi.y, b.hi.y), std::max(a.hi.z, b.hi.z)};
+    a.lo = component_min(a.lo, b.lo);
+    a.hi = component_max(a.hi, b.hi);
     a.power += b.power;
     merge_cones(a, b);
     a.cos_theta_e = std::min(a.cos_theta_e, b.cos_theta_e);
@@ -67,8 +67,8 @@ LightSelector::Bounds box_of(std::initializer_list<Vec3> points) {
     LightSelector::Bounds b;
     b.lo = b.hi = *points.begin();
     for (const Vec3& p : points) {
-        b.lo = {std::min(b.lo.x, p.x), std::min(b.lo.y, p.y), std::min(b.lo.z, p.z)};
-        b.hi = {std::max(b.hi.x, p.x), std::max(b.hi.y, p.y), std::max(b.hi.z, p.z)};
+        b.lo = component_min(b.lo, p);
+        b.hi = component_max(b.hi, p);
     }
     return b;
 }
@@ -343,8 +343,8 @@ std::uint32_t LightSelector::build(const std::vector<Entry>& entries, std::vecto
     Vec3 lo = keys[begin].twice_centre * 0.5, hi = lo;
     for (std::size_t i = begin; i < end; ++i) {
         const Vec3 c = keys[i].twice_centre * 0.5;
-        lo = {std::min(lo.x, c.x), std::min(lo.y, c.y), std::min(lo.z, c.z)};
-        hi = {std::max(hi.x, c.x), std::max(hi.y, c.y), std::max(hi.z, c.z)};
+        lo = component_min(lo, c);
+        hi = component_max(hi, c);
     }
     const Vec3 extent = hi - lo;
     const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
