@@ -2,6 +2,7 @@
 // 1e-3 m to 1e4 m and solid angles down to 1e-5 sr, where float loses digits).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 
 namespace omis {
@@ -26,6 +27,14 @@ constexpr Vec3 operator*(double s, Vec3 a) { return a *= s; }
 constexpr Vec3 operator/(Vec3 a, double s) { return a *= (1.0 / s); }
 // Component-wise product (colours).
 constexpr Vec3 hadamard(const Vec3& a, const Vec3& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+
+// Component-wise minimum and maximum (the corners of a bounding box).
+constexpr Vec3 component_min(const Vec3& a, const Vec3& b) {
+    return {std::min(a.x, b.x), std::min(a.y, b.y), std::min(a.z, b.z)};
+}
+constexpr Vec3 component_max(const Vec3& a, const Vec3& b) {
+    return {std::max(a.x, b.x), std::max(a.y, b.y), std::max(a.z, b.z)};
+}
 
 constexpr double dot(const Vec3& a, const Vec3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 constexpr Vec3 cross(const Vec3& a, const Vec3& b) {

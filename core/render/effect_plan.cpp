@@ -38,8 +38,8 @@ double mesh_extent(const Mesh& mesh) {
     if (mesh.positions.empty()) return 0;
     Vec3 lo = mesh.positions[0], hi = lo;
     for (const Vec3& p : mesh.positions) {
-        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        lo = component_min(lo, p);
+        hi = component_max(hi, p);
     }
     return length(hi - lo);
 }
@@ -159,8 +159,8 @@ std::vector<EffectPlan::OccluderBox> world_occluders(const Scene& scene) {
         for (const auto& t : mesh.triangles)
             for (std::uint32_t v : t) {
                 const Vec3& q = mesh.positions[v];
-                box.lo = {std::min(box.lo.x, q.x), std::min(box.lo.y, q.y), std::min(box.lo.z, q.z)};
-                box.hi = {std::max(box.hi.x, q.x), std::max(box.hi.y, q.y), std::max(box.hi.z, q.z)};
+                box.lo = component_min(box.lo, q);
+                box.hi = component_max(box.hi, q);
             }
         boxes.push_back(box);
     }

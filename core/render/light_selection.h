@@ -223,6 +223,9 @@ private:
         return (order_cdf_[position + 1] - order_cdf_[position]) /
                (order_cdf_[end] - order_cdf_[begin]);
     }
+    // The leaf position in [begin, end) whose share of the power CDF holds
+    // u ∈ [0, 1) (a draw inside a cluster).
+    std::uint32_t position_in(std::uint32_t begin, std::uint32_t end, double u) const;
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
     bool root_reaches(const Receiver& at, Memo* memo) const;
