@@ -572,7 +572,7 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
 // search over the whole range waited on a cache miss at nearly every step;
 // this one reads the guess's line and seldom another.
 std::uint32_t LightSelector::position_in(std::uint32_t begin, std::uint32_t end, double u) const {
-    const double target = order_cdf_[begin] + u * (order_cdf_[end] - order_cdf_[begin]);
+    const double target = cdf_point(begin, end, u);
     // The last position p in [begin, end) with order_cdf_[p] <= target (begin
     // at least): the interval that holds target, as upper_bound over the range
     // finds it. `below` holds where that is true.
@@ -660,7 +660,7 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
             const std::uint32_t position = position_in(begin, end, u);
             pmf *= share_in(position, begin, end);
             light = order_light_[position];
-            u = rescale_within(target, order_cdf_[position],
+            u = rescale_within(cdf_point(begin, end, u), order_cdf_[position],
                                order_cdf_[position + 1] - order_cdf_[position]);
         }
         if (light != ~0u) {

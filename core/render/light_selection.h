@@ -223,6 +223,10 @@ private:
         return (order_cdf_[position + 1] - order_cdf_[position]) /
                (order_cdf_[end] - order_cdf_[begin]);
     }
+    // Where u ∈ [0, 1) falls on the power CDF of the range [begin, end).
+    double cdf_point(std::uint32_t begin, std::uint32_t end, double u) const {
+        return order_cdf_[begin] + u * (order_cdf_[end] - order_cdf_[begin]);
+    }
     // The leaf position in [begin, end) whose share of the power CDF holds
     // u ∈ [0, 1) (a draw inside a cluster).
     std::uint32_t position_in(std::uint32_t begin, std::uint32_t end, double u) const;
