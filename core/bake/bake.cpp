@@ -443,6 +443,7 @@ private:
 
 BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
     settings.lighting.receiver = scene.mesh_receiver(settings.mesh);  // render/receiver.h
+    settings.lighting.points_on_mesh = settings.mesh;  // texels and corners lie on it
     // A noise target stops on the error, so the error must be measured, not
     // bounded: independent streams (DirectLightingSettings::streams).
     if (settings.noise_target > 0) settings.lighting.streams = kMaxSampleStreams;

@@ -2129,7 +2129,7 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
 LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettings& s)
     : scene((validate(scene_, s), scene_)),
       settings(s),
-      plan(plan_effects(scene_, s.techniques, s.samples)) {
+      plan(plan_effects(scene_, s.techniques, s.samples, s.points_on_mesh)) {
     for (std::size_t k = 0; k < settings.techniques.size(); ++k)
         if (plan.enabled[k]) techniques.push_back(int(k));
     for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {

@@ -52,6 +52,10 @@ struct DirectLightingSettings {
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
     Receiver receiver;
+    // The mesh every point shaded lies on (bake() sets its mesh); ~0u: points
+    // anywhere. The effect plan traces no shadow rays where it is flat and
+    // every mesh lies in its plane (EffectPlan::shadow_rays).
+    std::uint32_t points_on_mesh = ~0u;
 };
 
 struct DirectLightingStats {
