@@ -1169,10 +1169,10 @@ void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
             if (footprint && !p_.selector(t.selection)) {
                 std::uint8_t* kept = p_.table_reach.of(point);
                 reaches = choose_lights_over(k, probes, kept ? kept + kept_reach_at_[k] : nullptr);
-            }
-            else
+            } else {
                 for (int i = 0; i < n_probes && !reaches; ++i)
                     reaches = choose_lights(k, probes[i].x, probes[i].n);
+            }
             if (!reaches) continue;
             active.lights.push_back(k);
             active.light_mask |= std::uint64_t(1) << k;

@@ -173,9 +173,10 @@ std::vector<EffectPlan::OccluderBox> world_occluders(const Scene& scene) {
 // the side it leaves toward) moves away from the plane and meets no surface,
 // so no light can be shadowed there and no shadow ray need be traced (a lone
 // floor under lamps: the race's area, area_round, point_spot). Within a
-// millionth of the scene's radius: a surface that close to the plane could
-// hide only directions that close to the horizon, whose cosine-weighted
-// share is ~1e-12. An id past the meshes (~0u: points anywhere) says no.
+// millionth of the scene's radius: a tilted plane's float vertices stray
+// ~1e-7 of their size from it, and a surface closer to the plane than the
+// tolerance is z-fighting with it, where a traced ray's verdict is the
+// rounding's too. An id past the meshes (~0u: points anywhere) says no.
 bool nothing_can_occlude(const Scene& scene, std::uint32_t points_mesh) {
     const std::vector<Mesh>& meshes = scene.geometry().meshes();
     if (points_mesh >= meshes.size()) return false;
