@@ -181,7 +181,10 @@ double shade_in_passes(const Scene& scene, int size, const std::vector<int>& sch
     LightingContext context(scene, b.lighting);
     const std::size_t count = std::size_t(size) * size;
     if (context.keeps_texel_tables) context.texel_tables.index_points(count);
-    if (schedule.size() > 1) context.keep_draw_counts(count);
+    if (schedule.size() > 1) {
+        context.keep_draw_counts(count);
+        context.keep_table_reach(count);
+    }
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
     const double texel = 2.0 / size;  // the 2 m receiver; footprints half a texel wide
     int first_round = 0;

@@ -443,6 +443,7 @@ private:
 
 BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
     settings.lighting.receiver = scene.mesh_receiver(settings.mesh);  // render/receiver.h
+    settings.lighting.points_on_mesh = settings.mesh;  // texels and corners lie on it
     // A noise target stops on the error, so the error must be measured, not
     // bounded: independent streams (DirectLightingSettings::streams).
     if (settings.noise_target > 0) settings.lighting.streams = kMaxSampleStreams;
@@ -501,11 +502,13 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
                 context_.techniques.size() >= 2 && budget_.full_rounds >= 2;
     dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
     // Points shaded in more than one pass keep where their table draws stand
-    // (LightingContext::draw_counts), which a later pass continues from, and
-    // whether their centre is in every light's shadow (shadow_verdicts).
+    // (LightingContext::draw_counts), which a later pass continues from,
+    // whether their centre is in every light's shadow (shadow_verdicts), and
+    // the reach behind their uniform or power tables (table_reach).
     if (progressive_ || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
         context_.keep_shadow_verdicts(layout_.count);
+        context_.keep_table_reach(layout_.count);
     }
     if (allocate_) {
         probe_ = false;  // the first pass is the allocation's pilot, not replaced

@@ -52,6 +52,10 @@ struct DirectLightingSettings {
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
     Receiver receiver;
+    // The mesh every point shaded lies on (bake() sets its mesh); ~0u: points
+    // anywhere. The effect plan traces no shadow rays where it is flat and
+    // every mesh lies in its plane (EffectPlan::shadow_rays).
+    std::uint32_t points_on_mesh = ~0u;
 };
 
 struct DirectLightingStats {
@@ -129,6 +133,14 @@ public:
     // TexelDrawCounts::kByteBudget.
     mutable TexelDrawCounts draw_counts;
     void keep_draw_counts(std::size_t points);
+    // Per point, where no texel tables are kept (keeps_texel_tables false:
+    // every table weighs by no irradiance), which of its footprint's probes
+    // each light reaches, per table technique (render/texel_draws.h): a later
+    // pass makes the same tables from them instead of probing again (~37 %
+    // of what a later pass repeated on the race's area scene). 1 byte per
+    // point, table technique and integrated light; none past the budget.
+    mutable TexelReach table_reach;
+    void keep_table_reach(std::size_t points);
     // Per point, where settings.shadowed_draws > 1: its draws per count (1, or
     // shadowed_draws where its centre sees no light's middle), 0 before its
     // first call. The probe behind it is deterministic, so a job of several

@@ -1,6 +1,7 @@
 #include "render/effect_plan.h"
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -167,10 +168,41 @@ std::vector<EffectPlan::OccluderBox> world_occluders(const Scene& scene) {
     return boxes;
 }
 
+// Whether every point shaded lies on the flat mesh `points_mesh` and every
+// mesh of the scene lies in its plane: a ray from such a point (offset to
+// the side it leaves toward) moves away from the plane and meets no surface,
+// so no light can be shadowed there and no shadow ray need be traced (a lone
+// floor under lamps: the race's area, area_round, point_spot). Within a
+// millionth of the scene's radius: a tilted plane's float vertices stray
+// ~1e-7 of their size from it, and a surface closer to the plane than the
+// tolerance is z-fighting with it, where a traced ray's verdict is the
+// rounding's too. An id past the meshes (~0u: points anywhere) says no.
+bool nothing_can_occlude(const Scene& scene, std::uint32_t points_mesh) {
+    const std::vector<Mesh>& meshes = scene.geometry().meshes();
+    if (points_mesh >= meshes.size()) return false;
+    const Mesh& floor = meshes[points_mesh];
+    // The plane of its largest triangle (the best-conditioned normal).
+    std::uint32_t largest = 0;
+    double largest_area = 0;
+    for (std::uint32_t t = 0; t < floor.num_triangles(); ++t)
+        if (const double a = floor.triangle_area(t); a > largest_area) {
+            largest = t;
+            largest_area = a;
+        }
+    if (!(largest_area > 0)) return false;
+    const Vec3 normal = floor.geometric_normal(largest);
+    const Vec3 origin = floor.positions[floor.triangles[largest][0]];
+    const double tolerance = 1e-6 * scene.bounding_radius();
+    for (const Mesh& mesh : meshes)
+        for (const Vec3& p : mesh.positions)
+            if (!(std::abs(dot(p - origin, normal)) <= tolerance)) return false;
+    return true;
+}
+
 }  // namespace
 
 EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techniques,
-                        const std::vector<int>& samples) {
+                        const std::vector<int>& samples, std::uint32_t points_mesh) {
     EffectPlan plan;
     plan.techniques = techniques;
     plan.samples = samples;
@@ -187,7 +219,8 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         plan.bsdf_invisible_lights = plan.bsdf_invisible_lights || !l.visible_to_bsdf;
         any_projectable = any_projectable || has_planar_projection(l);
     }
-    plan.shadow_rays = scene.geometry().has_occluders() && any_shadow;
+    plan.shadow_rays = scene.geometry().has_occluders() && any_shadow &&
+                       !nothing_can_occlude(scene, points_mesh);
     plan.world_by_bsdf = world_left_to_bsdf(scene, techniques, samples);
     plan.world_through_emitters = plan.world_by_bsdf && world_seen_through_emitters(scene);
     if (plan.world_through_emitters) plan.world_occluders = world_occluders(scene);
@@ -238,7 +271,7 @@ std::string EffectPlan::to_string() const {
     if (!any) s << " none";
     s << "\n  integrated by MIS: " << integrated_lights << " light(s); delta (one shadow ray"
       << " each, outside MIS): " << delta_lights << "\n  shadow rays: "
-      << (shadow_rays ? "yes" : "no (nothing can occlude)") << "\n  MIS system per point: "
+      << (shadow_rays ? "yes" : "no (nothing can occlude the points)") << "\n  MIS system per point: "
       << (mis_system ? "yes" : "no") << "\n";
     if (sample_delta_lights)
         s << "  delta lights: " << delta_lights << ", too many for a shadow ray each: "

@@ -16,7 +16,9 @@ struct EffectPlan {
     int lights_by_type[7] = {};  // indexed by LightType
     int integrated_lights = 0;   // non-delta lights: the MIS system's business
     int delta_lights = 0;        // one shadow ray each, outside MIS
-    bool shadow_rays = false;    // some occluding geometry exists
+    // Some geometry could occlude a light from a point shaded (not where the
+    // points lie on a flat mesh in whose plane every mesh lies).
+    bool shadow_rays = false;
     bool bsdf_invisible_lights = false;  // lights only light techniques may see
     // The (constant) world is left to the `bsdf` technique, as Cycles leaves a
     // constant world to its BSDF rays: light techniques then draw only the
@@ -57,8 +59,10 @@ struct EffectPlan {
     std::string to_string() const;
 };
 
+// points_mesh: the mesh every point shaded lies on (a bake's), when known;
+// past the meshes (the default), points anywhere.
 EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techniques,
-                        const std::vector<int>& samples);
+                        const std::vector<int>& samples, std::uint32_t points_mesh = ~0u);
 
 // The effect plan's default choice of techniques and samples per round for a
 // scene (what a bake uses when the caller names none), all with solid-angle

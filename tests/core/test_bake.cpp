@@ -343,6 +343,62 @@ TEST_CASE("draws: N per texel, and exactly 4N where a texel's centre is shadowed
         }
 }
 
+// A flat floor alone under its lights (the race's area scenes): a ray from
+// a texel leaves the floor's plane and meets nothing, so the bake traces no
+// shadow ray, the shadow probe's included (EffectPlan::shadow_rays). Its
+// estimates must be those of the same floor with a mesh that hides nothing
+// (a triangle under the floor), which traces them: bit for bit, the probe's
+// verdicts as well (texels that see no light's middle point, here at the
+// spread lamp's far end, are still found). The floor is tilted, so that its
+// float vertices lie on its plane only within rounding.
+TEST_CASE("a lone flat floor: no shadow rays, the estimates of one with a mesh that hides nothing",
+          "[bake]") {
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    MeshInput floor = grid_mesh(5, 0.3, 9, positions, triangles, uvs);
+    const double tilt = 0.3;  // radians about the x axis
+    for (std::size_t i = 0; i < positions.size(); i += 3) {
+        const double y = positions[i + 1];
+        positions[i + 1] = float(y * std::cos(tilt));
+        positions[i + 2] = float(y * std::sin(tilt));
+    }
+    auto build = [&](Scene& scene, bool hidden_triangle) {
+        scene.add_mesh(floor);
+        if (hidden_triangle)
+            scene.add_mesh(std::vector<Vec3>{{0.4, 0.4, -0.5}, {0.6, 0.4, -0.5}, {0.5, 0.6, -0.5}},
+                           {{0, 1, 2}});
+        // Comparable local lamps (the plan's uniform selection and probe),
+        // facing down over the floor's corner at the origin and spread over
+        // 60°: the far corner's texels see neither one's middle point.
+        scene.add_light(make_rect_light(Vec3(0.1, 0.1, 1.2), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
+                                        Vec3(8, 8, 8), false, kPi / 3));
+        scene.add_light(make_rect_light(Vec3(0.05, 0.4, 1.3), Vec3(0, 0.2, 0), Vec3(0.2, 0, 0),
+                                        Vec3(12, 12, 12), false, kPi / 3));
+        scene.commit();
+    };
+    Scene alone, with_triangle;
+    build(alone, false);
+    build(with_triangle, true);
+    for (bool passes : {false, true}) {
+        BakeSettings s;
+        s.width = s.height = 16;
+        s.samples = 24;
+        if (passes) s.time_budget = 1000;  // passes, never reached
+        const BakeResult a = bake(alone, s), b = bake(with_triangle, s);
+        INFO(a.stats.plan);
+        INFO(b.stats.plan);
+        CHECK(a.stats.plan.find("shadow rays: no") != std::string::npos);
+        CHECK(b.stats.plan.find("shadow rays: yes") != std::string::npos);
+        CHECK(a.stats.rays_traced == 0);
+        CHECK(b.stats.rays_traced > 0);
+        REQUIRE(a.stats.covered == b.stats.covered);
+        CHECK(a.stats.shadowed_texels > 0);
+        CHECK(a.stats.shadowed_texels == b.stats.shadowed_texels);
+        CHECK(a.stats.draws == b.stats.draws);
+        CHECK(a.value == b.value);
+    }
+}
+
 TEST_CASE("a scene without lights bakes black (not NaN) with the asked sample count", "[bake]") {
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;

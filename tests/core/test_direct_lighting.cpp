@@ -307,6 +307,29 @@ TEST_CASE("effect plan: what a scene does not use costs nothing", "[direct]") {
         light_copies(scene, x, n, {"uniform/area"}, {4}, 1, Strategy::Balance, 1, &stats);
         CHECK(stats.rays_traced == 0);
     }
+    SECTION("a lone plane still shadows points off it") {
+        // The plane z = 0 between a point above it, facing down, and a
+        // two-sided lamp below it: with the points' mesh unknown (as here),
+        // or another mesh, the plan keeps its shadow rays and the lamp is
+        // hidden; only points on the plane itself are spared them (test_bake).
+        Scene scene;
+        scene.add_mesh(std::vector<Vec3>{{-2, -2, 0}, {2, -2, 0}, {2, 2, 0}, {-2, 2, 0}},
+                       {{0, 1, 2}, {0, 2, 3}});
+        scene.add_light(make_rect_light(Vec3(-0.5, -0.5, -1), Vec3(0, 1, 0), Vec3(1, 0, 0),
+                                        Vec3(1, 1, 1), true, kPi));
+        scene.commit();
+        const double above[3] = {0, 0, 1}, down[3] = {0, 0, -1};
+        for (std::uint32_t points_on : {~0u, 1u}) {  // 1: no such mesh
+            DirectLightingSettings s =
+                testing::lighting_settings({"uniform/solid-angle"}, {4}, 2, Strategy::Balance, 3);
+            s.points_on_mesh = points_on;
+            double value[3];
+            const DirectLightingStats stats = direct_lighting(scene, above, down, 1, s, value, nullptr);
+            CHECK(stats.plan.shadow_rays);
+            CHECK(stats.rays_traced > 0);
+            CHECK(value[0] == 0.0);
+        }
+    }
     SECTION("sun only: parallel and bsdf do not apply; the sun's cone still sampled") {
         Scene scene;
         scene.add_light(make_sun_light(Vec3(0, 0, -1), Vec3(1, 1, 1), 0.1));

@@ -41,36 +41,45 @@ TEST_CASE("set-up reuse: a point shades the same after other points as on its ow
     Scene scene;
     add_scene(scene);
     // Lit texels, one at the spread light's rim, one only its corner reaches,
-    // and unlit ones (under the one-sided lights' backs: beyond every reach)
-    // between them.
+    // one whose footprint the narrow light reaches at two corners but not
+    // its centre, and unlit ones (under the one-sided lights' backs: beyond
+    // every reach) between them.
     const std::vector<SquareFootprint> texels = {
         {Vec3(0, 0, 0), 0.02},     {Vec3(-2.9, 2.9, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05},
         {Vec3(2.9, -2.9, 0), 0.1}, {Vec3(1.3, 1.3, 0), 0.08},  {Vec3(-2.9, -2.9, 0), 0.02},
-        {Vec3(-0.4, -0.3, 0), 0.02},
+        {Vec3(1.5, 1.3, 0), 0.08}, {Vec3(-0.4, -0.3, 0), 0.02},
     };
-    for (const char* light_technique : {"uniform/solid-angle", "unoccluded/area"}) {
-        DirectLightingSettings s;
-        for (const char* name : {light_technique, "bsdf"})
-            s.techniques.push_back(*parse_technique(name));
-        s.samples = {1, 1};
-        s.strategy = Strategy::OptimalDirect;
-        s.seed = 5;
-        LightingContext shared(scene, s);
-        PointLighting reused(shared);
-        for (int pass = 0; pass < 2; ++pass)  // a first pass, then one from kept tables
-            for (std::size_t t = 0; t < texels.size(); ++t) {
-                const SquareFootprint& f = texels[t];
-                const int first_round = pass == 0 ? 0 : 1, rounds = pass == 0 ? 1 : 5;
-                double after[3], after_var[3], alone[3], alone_var[3];
-                reused.shade(t, first_round, rounds, f.centre(), &f, after, after_var);
-                LightingContext own(scene, s);
-                PointLighting fresh(own);
-                fresh.shade(t, first_round, rounds, f.centre(), &f, alone, alone_var);
-                INFO(light_technique << ", pass " << pass << ", texel " << t);
-                CHECK(same_bits(after, alone));
-                CHECK(same_bits(after_var, alone_var));
+    // keep_reach: the uniform and power tables made again from the reach the
+    // first pass kept (LightingContext::table_reach) instead of by probing.
+    for (const char* light_technique : {"uniform/solid-angle", "power/area", "unoccluded/area"})
+        for (bool keep_reach : {false, true}) {
+            DirectLightingSettings s;
+            for (const char* name : {light_technique, "bsdf"})
+                s.techniques.push_back(*parse_technique(name));
+            s.samples = {1, 1};
+            s.strategy = Strategy::OptimalDirect;
+            s.seed = 5;
+            LightingContext shared(scene, s);
+            if (keep_reach) {
+                shared.keep_table_reach(texels.size());
+                CHECK((shared.table_reach.bytes() > 0) == !shared.keeps_texel_tables);
             }
-    }
+            PointLighting reused(shared);
+            for (int pass = 0; pass < 2; ++pass)  // a first pass, then one from kept tables
+                for (std::size_t t = 0; t < texels.size(); ++t) {
+                    const SquareFootprint& f = texels[t];
+                    const int first_round = pass == 0 ? 0 : 1, rounds = pass == 0 ? 1 : 5;
+                    double after[3], after_var[3], alone[3], alone_var[3];
+                    reused.shade(t, first_round, rounds, f.centre(), &f, after, after_var);
+                    LightingContext own(scene, s);
+                    PointLighting fresh(own);
+                    fresh.shade(t, first_round, rounds, f.centre(), &f, alone, alone_var);
+                    INFO(light_technique << (keep_reach ? ", reach kept" : "") << ", pass " << pass
+                                         << ", texel " << t);
+                    CHECK(same_bits(after, alone));
+                    CHECK(same_bits(after_var, alone_var));
+                }
+        }
 }
 
 TEST_CASE("draw counts kept between passes: a later pass shades as one that counts again",
