@@ -101,7 +101,7 @@ TEST_CASE("selection pmfs sum to 1 and match drawing frequencies", "[selection]"
     }
 }
 
-TEST_CASE("a selection's rest is uniform on [0, 1) and independent of the light chosen",
+TEST_CASE("a selection's rest is uniform in the unit interval and independent of the light chosen",
           "[selection]") {
     // The shape draw takes SelectedLight::rest as a coordinate: given the
     // light, it must be uniform. Pearson's chi-square over (light, quarter of
