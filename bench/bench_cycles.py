@@ -238,6 +238,8 @@ def cycles_at(rows, scene, seconds, key="seconds"):
            if r["scene"] == scene and r["strategy"] == "cycles" and r["rel_mse"] > 0]
     t = np.log([p[0] for p in pts])
     e = np.log([p[1] for p in pts])
+    if len(set(t)) < 2:  # one sample count at every budget (a loaded machine): no slope
+        return float(np.exp(np.mean(e)))
     fit = np.polyfit(t, e, 2 if len(set(t)) >= 4 else 1)
     x = float(np.clip(np.log(seconds), t.min(), t.max()))
     slope = np.polyval(np.polyder(fit), x)
