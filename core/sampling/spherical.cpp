@@ -58,17 +58,15 @@ std::optional<SphericalRect> SphericalRect::make(const Vec3& x, const Vec3& corn
     r.la_ = length(near0);
     r.ld_ = length(near1);
     r.ad_ = dot(near0, near1);
-    double hx, hy;
-    r.half_angle_vector(r.W_, hx, hy, r.far_lengths_);
-    r.omega_ = 2.0 * std::atan2(hy, hx);
+    r.omega_ = r.sub_solid_angle(r.W_, r.far_lengths_);
     if (!(r.omega_ > 0) || !std::isfinite(r.omega_) || !(r.dphi_ > 0)) return std::nullopt;
     // The inverse δ(u1)'s slopes at both ends (in units of dphi per u1):
     // Ω/(dphi · dΩ/dφ), with dΩ/dφ = h1 − h0 at the edges x0 and x0 + W.
     // Capped at 3, the Hermite cubic through them is monotone (Fritsch &
     // Carlson), so the first guess stays inside [0, dphi]; an edge seen
     // edge-on (dΩ/dφ = 0: an infinite slope, or 0/0) takes the cap.
-    const double slope_near = r.y1_ / r.ld_ - r.y0_ / r.la_;
-    const double slope_far = r.y1_ / r.far_lengths_[1] - r.y0_ / r.far_lengths_[0];
+    const double slope_near = r.dsolid_angle_dphi(r.la_, r.ld_);
+    const double slope_far = r.dsolid_angle_dphi(r.far_lengths_[0], r.far_lengths_[1]);
     const double scale = r.omega_ / r.dphi_;
     r.guess_slope0_ = std::min(3.0, scale / slope_near);
     r.guess_slope1_ = std::min(3.0, scale / slope_far);
@@ -116,9 +114,9 @@ void advance_angle(double step, double next, double& cos_a, double& sin_a) {
 
 }  // namespace
 
-double SphericalRect::sub_solid_angle(double w) const {
+double SphericalRect::sub_solid_angle(double w, double* bc_lengths) const {
     double x, y;
-    half_angle_vector(w, x, y);
+    half_angle_vector(w, x, y, bc_lengths);
     return 2.0 * std::atan2(y, x);
 }
 
@@ -171,9 +169,7 @@ DirSample SphericalRect::sample(double u1, double u2) const {
         turn(cd, sd, c, unused_sin);
         double x, y, bc[2];
         half_angle_vector(width_at(delta, sd, c), x, y, bc);
-        // dΩ/dφ = h1 − h0, exact: h = cos of the angle to ey of the
-        // corners b and c, y/|b| and y/|c|.
-        const double dg = y1_ / bc[1] - y0_ / bc[0];
+        const double dg = dsolid_angle_dphi(bc[0], bc[1]);
         const double r = std::sqrt(x * x + y * y);
         const double g = r > 0 ? 2.0 * (y * ct - x * st) / r : -target;
         if (g == 0) break;

@@ -48,7 +48,11 @@ public:
     Point2 invert(const Vec3& w) const;
 
 private:
-    double sub_solid_angle(double w) const;  // Ω of [x0, x0+w] × [y0, y1]
+    // Ω of [x0, x0+w] × [y0, y1]; bc_lengths as half_angle_vector's.
+    double sub_solid_angle(double w, double* bc_lengths = nullptr) const;
+    // dΩ/dφ = h1 − h0 at the edge whose corners at y0 and y1 lie at distances
+    // len0 and len1 (h = cos of the angle to ey: y/len). Exact.
+    double dsolid_angle_dphi(double len0, double len1) const { return y1_ / len1 - y0_ / len0; }
     // Ω/2 of [x0, x0+w] × [y0, y1] as the angle of (cos, sin) ∝ (x, y), y ≥ 0.
     // bc_lengths (if asked): |b|, |c| of the far corners (x0 + w, y0), (x0 + w, y1).
     void half_angle_vector(double w, double& x, double& y, double* bc_lengths = nullptr) const;
