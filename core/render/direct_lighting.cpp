@@ -338,6 +338,12 @@ struct PointLighting::Impl {
         __builtin_prefetch(record);
         __builtin_prefetch(record + 64);
     }
+    // GeometryScene::ListedLight: light l's record and its tree pmf's.
+    static void prefetch_listed(void* self, std::uint32_t l) {
+        const Impl& impl = *static_cast<const Impl*>(self);
+        impl.prefetch_light(l);
+        if (impl.p_.tree_selector) impl.p_.tree_selector->prefetch(l);
+    }
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     bool choose_lights(int k, const Vec3& x, const Vec3& n);
     // choose_lights' per-point table for a whole footprint (its probes: the
@@ -978,14 +984,13 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     std::optional<RayHit> blocker;
     merged_.clear();
     if (geometry.has_emitter_candidates()) {
-        blocker = geometry.closest_hit_and_emitters(origin, w, merged_, complete);
         // The lights found are read next (their radiance, then their
         // shapes' densities and tree pmfs): among 100k lights each record is
-        // a cache miss, fetched here side by side instead of one after another.
-        for (std::uint32_t l : merged_) {
-            prefetch_light(l);
-            if (p_.tree_selector) p_.tree_selector->prefetch(l);
-        }
+        // a cache miss, started as the traversal lists the light (the far
+        // side of a closed mesh is still to be traversed) instead of one
+        // after another once it is done.
+        blocker = geometry.closest_hit_and_emitters(origin, w, merged_, complete,
+                                                    &Impl::prefetch_listed, this);
     } else
         blocker = geometry.closest_hit(origin, w, 0, std::numeric_limits<double>::infinity());
     // integrand()'s rule: whether the blocker hides a light at `distance`

@@ -54,10 +54,18 @@ constexpr float kNearEdge = 1e-3f;
 struct EmitterQuery {
     const std::uint32_t* light_of = nullptr;
     std::uint32_t candidates = ~0u;  // their geometry id
-    // Emissive meshes' lights: mesh_light[mesh_light_start[mesh] + triangle].
+    // Emissive meshes' lights (GeometryScene::MeshLights, per mesh), and the
+    // table of those whose triangles' lights are not consecutive.
+    const GeometryScene::MeshLights* mesh_lights = nullptr;
     const std::uint32_t* mesh_light = nullptr;
-    const std::uint32_t* mesh_light_start = nullptr;
     std::vector<std::uint32_t>* lights = nullptr;
+    // Told of each light as it is listed (may be null).
+    GeometryScene::ListedLight on_listed = nullptr;
+    void* on_listed_context = nullptr;
+    void list(std::uint32_t light) {
+        lights->push_back(light);
+        if (on_listed) on_listed(on_listed_context, light);
+    }
     // The closest hit on an emissive mesh so far (rejected, so that the
     // traversal goes on to the lights behind it).
     float t = INFINITY, u = 0, v = 0;
@@ -83,15 +91,17 @@ void emitter_filter(const RTCFilterFunctionNArguments* args) {
         const unsigned geometry = RTCHitN_geomID(args->hit, args->N, i);
         const unsigned primitive = RTCHitN_primID(args->hit, args->N, i);
         if (geometry == q->candidates) {
-            q->lights->push_back(q->light_of[primitive]);
+            q->list(q->light_of[primitive]);
             continue;
         }
         // An emissive mesh's triangle: its light is listed (it has no
         // candidate: the hit is the triangle's own).
         const float t = RTCRayN_tfar(args->ray, args->N, i);
         const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
-        const std::uint32_t light = q->mesh_light[q->mesh_light_start[geometry] + primitive];
-        if (light != ~0u) q->lights->push_back(light);
+        const GeometryScene::MeshLights& m = q->mesh_lights[geometry];
+        const std::uint32_t light =
+            m.consecutive ? m.first + primitive : q->mesh_light[m.first + primitive];
+        if (light != ~0u) q->list(light);
         q->near_edge = q->near_edge || std::min({u, v, 1.0f - u - v}) < kNearEdge;
         if (t < q->t) {
             q->t = t;
@@ -496,7 +506,7 @@ void GeometryScene::occluded(const Ray* rays, std::size_t count, bool* out) cons
 void GeometryScene::drop_emitter_candidates() {
     emitter_query_ = false;
     mesh_light_.clear();
-    mesh_light_start_.clear();
+    mesh_lights_.clear();
     if (candidates_geometry_ == ~0u) return;
     rtcDetachGeometry(scene_, candidates_geometry_);
     candidates_geometry_ = ~0u;
@@ -509,20 +519,37 @@ void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
     drop_emitter_candidates();
     committed_ = false;
     // Every emissive mesh's triangles, ~0u where a triangle has no light.
-    mesh_light_start_.assign(meshes_.size(), 0);
+    std::vector<std::uint32_t> start(meshes_.size(), 0);
     std::size_t emissive_triangles = 0;
     for (std::size_t m = 0; m < meshes_.size(); ++m) {
-        mesh_light_start_[m] = std::uint32_t(emissive_triangles);
+        start[m] = std::uint32_t(emissive_triangles);
         if (meshes_[m].is_emissive()) emissive_triangles += meshes_[m].num_triangles();
     }
-    mesh_light_.assign(emissive_triangles, ~0u);
+    std::vector<std::uint32_t> all(emissive_triangles, ~0u);
     for (const MeshTriangleLight& l : mesh_lights) {
         if (l.mesh >= meshes_.size() || !meshes_[l.mesh].is_emissive() ||
             l.triangle >= meshes_[l.mesh].num_triangles())
             throw std::invalid_argument("set_emitter_candidates: no emissive triangle " +
                                         std::to_string(l.triangle) + " in mesh " +
                                         std::to_string(l.mesh));
-        mesh_light_[mesh_light_start_[l.mesh] + l.triangle] = l.light;
+        all[start[l.mesh] + l.triangle] = l.light;
+    }
+    // A mesh whose triangles are lights first, first + 1, ... (one light per
+    // triangle, in order: no degenerate triangle) needs no table, and the
+    // traversal no read of it (among 100k triangles, a cache miss a hit).
+    mesh_lights_.assign(meshes_.size(), MeshLights{});
+    for (std::size_t m = 0; m < meshes_.size(); ++m) {
+        if (!meshes_[m].is_emissive()) continue;
+        const std::uint32_t* own = all.data() + start[m];
+        const std::size_t n = meshes_[m].num_triangles();
+        bool consecutive = own[0] != ~0u;
+        for (std::size_t t = 1; t < n && consecutive; ++t) consecutive = own[t] == own[0] + t;
+        if (consecutive) {
+            mesh_lights_[m] = {own[0], true};
+        } else {
+            mesh_lights_[m] = {std::uint32_t(mesh_light_.size()), false};
+            mesh_light_.insert(mesh_light_.end(), own, own + n);
+        }
     }
     emitter_query_ = true;
     const std::size_t triangles = light_of.size();
@@ -542,7 +569,7 @@ void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
 
 std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     const Vec3& origin, const Vec3& direction, std::vector<std::uint32_t>& lights,
-    bool& complete) const {
+    bool& complete, ListedLight on_listed, void* on_listed_context) const {
     require_committed("closest_hit_and_emitters");
     if (!has_emitter_candidates())
         throw std::logic_error("GeometryScene::closest_hit_and_emitters: no emitter candidates");
@@ -559,9 +586,11 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     EmitterQuery q;
     q.light_of = candidate_light_of_.data();
     q.candidates = candidates_geometry_;
+    q.mesh_lights = mesh_lights_.data();
     q.mesh_light = mesh_light_.data();
-    q.mesh_light_start = mesh_light_start_.data();
     q.lights = &lights;
+    q.on_listed = on_listed;
+    q.on_listed_context = on_listed_context;
     QueryContext ctx;
     rtcInitIntersectContext(&ctx.context);
     ctx.emitters = &q;

@@ -4,7 +4,8 @@
 // and no emissive triangle is hit near its edge (`complete`), every one the
 // ray crosses (an emissive mesh's triangles by their exact shape: they have
 // no enlarged candidate there; other lights by their candidates), else at
-// least those before the hit.
+// least those before the hit. Each light it appends is also handed to the
+// caller's hook (ListedLight) at once.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -25,6 +26,11 @@ std::vector<std::uint32_t> sorted_unique(std::vector<std::uint32_t> v) {
     return v;
 }
 
+// GeometryScene::ListedLight that keeps what it is told.
+void keep_listed(void* kept, std::uint32_t light) {
+    static_cast<std::vector<std::uint32_t>*>(kept)->push_back(light);
+}
+
 }  // namespace
 
 TEST_CASE("closest_hit_and_emitters: closest_hit's hit and the lights along the ray",
@@ -38,7 +44,17 @@ TEST_CASE("closest_hit_and_emitters: closest_hit's hit and the lights along the 
                                     Vec3(5, 5, 5), false, kPi));
     scene.add_mesh(std::vector<Vec3>{{0.2, -1, 0.3}, {1, -1, 0.3}, {1, 1, 0.3}, {0.2, 1, 0.3}},
                    {{0, 1, 2}, {0, 2, 3}});
+    // An emissive strip with a degenerate triangle (no light) among its
+    // own: its triangles' lights are not consecutive, so its hits name them
+    // through GeometryScene's table, where the spheres' are computed.
+    scene.add_mesh(std::vector<Vec3>{{-0.6, -0.5, 0.6}, {-0.1, -0.5, 0.6}, {-0.6, 0, 0.6},
+                                     {-0.1, 0, 0.6}, {-0.6, 0.5, 0.6}, {-0.1, 0.5, 0.6},
+                                     {-0.35, -0.5, 0.6}},
+                   {{0, 1, 3}, {0, 3, 2}, {0, 6, 1}, {2, 3, 5}, {2, 5, 4}}, Vec3(2, 2, 2));
     scene.commit();
+    const std::uint32_t strip = std::uint32_t(scene.geometry().num_meshes() - 1);
+    REQUIRE(scene.geometry().mesh(strip).degenerate_triangles == 1);
+    int strip_hits = 0;
     const GeometryScene& geometry = scene.geometry();
     REQUIRE(geometry.has_emitter_candidates());
     const double inf = std::numeric_limits<double>::infinity();
@@ -51,11 +67,16 @@ TEST_CASE("closest_hit_and_emitters: closest_hit's hit and the lights along the 
         const Vec3 o(1.2 * u(rng), 1.2 * u(rng), 0);
         const Vec3 d = Vec3(0.5 * u(rng), 0.5 * u(rng), 1 + 1.2 * (u(rng) + 1)) - o;
         const auto expected = geometry.closest_hit(o, d, 0, inf);
-        std::vector<std::uint32_t> lights;
+        std::vector<std::uint32_t> lights, listed;
         bool complete = false;
-        const auto hit = geometry.closest_hit_and_emitters(o, d, lights, complete);
+        const auto hit =
+            geometry.closest_hit_and_emitters(o, d, lights, complete, &keep_listed, &listed);
         INFO("ray " << i);
         REQUIRE(hit.has_value() == expected.has_value());
+        CHECK(listed == lights);
+        // (Whether the strip's lights are named right: the checks against
+        // lights_along below, which finds them by their own shapes.)
+        for (std::uint32_t l : lights) strip_hits += scene.lights()[l].mesh == strip ? 1 : 0;
         std::vector<std::uint32_t> along;
         scene.emitter_shapes().lights_along(o, d, along);
         along = sorted_unique(along);
@@ -95,6 +116,7 @@ TEST_CASE("closest_hit_and_emitters: closest_hit's hit and the lights along the 
     CHECK(complete_rays > 1000);
     CHECK(blocked_rays > 200);
     CHECK(emissive_hits > 1000);
+    CHECK(strip_hits > 200);
     // A hit within 1e-3 (in barycentrics) of an edge: ~0.6 % of a
     // triangle, a few hits per ray.
     CHECK(near_edge_rays < complete_rays / 20);
