@@ -82,18 +82,6 @@ void add_area_grid(Scene& scene, int side) {
         }
 }
 
-// bench_cycles.py's emissive_mesh race scene (tests/blender/cycles_scenes.py):
-// a UV sphere of 128 × 64 segments (16,128 triangles, radius 0.3 at
-// (0.2, 0.1, 0.6), Blender's emission 3 × (1, 0.85, 0.7)) under a 0.3 m square
-// light of 40 W at 1.4 m, emitting down (radiance P/(4A), as
-// omis.blender_units.area_light); its receivers cover the race's 2 m floor.
-void add_race_mesh(Scene& scene) {
-    testing::add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 64, 128,
-                                 Vec3(3.0, 2.55, 2.1));
-    scene.add_light(make_rect_light(Vec3(0.2, 0.05, 1.4), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
-                                    Vec3(1, 1, 1) * (40.0 / (4.0 * 0.09)), false, kPi));
-}
-
 // CPU time of this thread (s): on the shared machine, time spent waiting for
 // a core is not the code's.
 double cpu_seconds() {
@@ -259,8 +247,8 @@ int main(int argc, char** argv) {
                     },
                     grid, texels, rounds, fast));
         if (wanted("race", 16129))
-            scenes.push_back(std::make_unique<Timed>("race mesh", 16129, add_race_mesh, grid,
-                                                     texels, rounds, fast, 2.0));
+            scenes.push_back(std::make_unique<Timed>("race mesh", 16129, testing::add_race_mesh,
+                                                     grid, texels, rounds, fast, 2.0));
         for (int side : {1, 4, 16, 100})
             if (wanted("point", side * side))
                 scenes.push_back(std::make_unique<Timed>(

@@ -29,6 +29,7 @@
 #include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
 #include "render/effect_plan.h"
+#include "support/emissive_sphere.h"
 #include "support/square_footprint.h"
 
 #include <tbb/blocked_range2d.h>
@@ -81,6 +82,10 @@ std::map<std::string, std::function<void(Scene&)>> scenes() {
         scene.add_light(make_rect_light(Vec3(0.1, 0.15, 0.6), Vec3(-0.15, 0.26, 0.0),
                                         Vec3(0.78, 0.45, 0.0), Vec3(40, 40, 40), false,
                                         0.5 * kPi));
+    };
+    s["emissive_mesh"] = [](Scene& scene) {
+        add_receiver(scene);
+        omis::testing::add_race_mesh(scene);
     };
     s["area_round"] = [](Scene& scene) {
         add_receiver(scene);
@@ -184,6 +189,7 @@ double shade_in_passes(const Scene& scene, int size, const std::vector<int>& sch
     if (schedule.size() > 1) {
         context.keep_draw_counts(count);
         context.keep_table_reach(count);
+        context.keep_region_radii(count);
     }
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
     const double texel = 2.0 / size;  // the 2 m receiver; footprints half a texel wide

@@ -503,12 +503,14 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
     // Points shaded in more than one pass keep where their table draws stand
     // (LightingContext::draw_counts), which a later pass continues from,
-    // whether their centre is in every light's shadow (shadow_verdicts), and
-    // the reach behind their uniform or power tables (table_reach).
+    // whether their centre is in every light's shadow (shadow_verdicts), the
+    // reach behind their uniform or power tables (table_reach), and the
+    // radius of their footprint's region (region_radii).
     if (progressive_ || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
         context_.keep_shadow_verdicts(layout_.count);
         context_.keep_table_reach(layout_.count);
+        if (layout_.lightmap()) context_.keep_region_radii(layout_.count);
     }
     if (allocate_) {
         probe_ = false;  // the first pass is the allocation's pilot, not replaced

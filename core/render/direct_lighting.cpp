@@ -551,7 +551,9 @@ struct PointLighting::Impl {
     // afresh at each sample's own position.
     LightSelector::Receiver region_;
     LightSelector::Memo region_memo_;
-    void set_region(Probes& probes);
+    // point: the shading's stream, whose radius the context may keep
+    // (LightingContext::region_radii).
+    void set_region(std::uint64_t point, Probes& probes);
     LightSelector::Receiver receiver_at(const Vec3& x, const Vec3& n,
                                         LightSelector::Memo*& memo);
 };
@@ -1222,10 +1224,15 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
 // the whole footprint where it is flat (a parallelogram); a sample outside
 // it (a footprint bent over a crease) is drawn for its own position.
 // Only selectors draw with it: without them the corners are not made here.
-void PointLighting::Impl::set_region(Probes& probes) {
+void PointLighting::Impl::set_region(std::uint64_t point, Probes& probes) {
     const SurfacePoint& centre = probes[0];
     region_ = {centre.x, centre.n, 0.0};
     if (probes.count() == 1) return;
+    double* kept = point < p_.region_radii.size() ? &p_.region_radii[point] : nullptr;
+    if (kept && *kept >= 0) {
+        region_.radius = *kept;
+        return;
+    }
     bool selectors = false;
     for (int k : p_.techniques)
         selectors = selectors || (!p_.settings.techniques[k].bsdf &&
@@ -1237,6 +1244,7 @@ void PointLighting::Impl::set_region(Probes& probes) {
         r2 = std::max(r2, dot(d, d));
     }
     region_.radius = std::sqrt(r2);
+    if (kept) *kept = region_.radius;
 }
 
 // Sampling and the densities at a sample both ask here with the sample's x,
@@ -1256,7 +1264,7 @@ LightSelector::Receiver PointLighting::Impl::receiver_at(const Vec3& x, const Ve
 void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
                                      const Footprint* footprint, Active& active) {
     Probes probes(centre, footprint);
-    set_region(probes);
+    set_region(stream, probes);
     TexelTables& kept = p_.texel_tables;
     keep = keep && !cheap_tables_;
     if (keep)
@@ -2211,6 +2219,14 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
 void LightingContext::keep_shadow_verdicts(std::size_t points) {
     if (settings.shadowed_draws > 1 && settings.shadowed_draws <= 255)  // a byte each
         shadow_verdicts.assign(points, 0);
+}
+
+void LightingContext::keep_region_radii(std::size_t points) {
+    // PointLighting's set_region makes a region only for selectors' draws.
+    const bool selectors = std::any_of(techniques.begin(), techniques.end(), [&](int k) {
+        return !settings.techniques[k].bsdf && selector(settings.techniques[k].selection);
+    });
+    if (selectors) region_radii.assign(points, -1.0);
 }
 
 void LightingContext::keep_table_reach(std::size_t points) {

@@ -149,6 +149,15 @@ public:
     // kept. 1 byte per point.
     mutable std::vector<std::uint8_t> shadow_verdicts;
     void keep_shadow_verdicts(std::size_t points);
+    // Per point with a footprint, where a technique draws from a selector:
+    // the radius of the region its samples draw lights for (the footprint's
+    // farthest corner from its centre), negative before its first call. A
+    // job of several passes keeps it (keep_region_radii) instead of placing
+    // the four corners again at every pass (~900 instructions a texel and
+    // pass on the race's emissive_mesh, a fifth of what a later pass
+    // repeats there). 8 bytes per point.
+    mutable std::vector<double> region_radii;
+    void keep_region_radii(std::size_t points);
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes

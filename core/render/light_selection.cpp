@@ -135,13 +135,34 @@ double importance_of(const Vec3& centre, double radius, double power, const Vec3
     return power * std::max(cos_p, 1e-9) * std::max(cos_i, 1e-9) * (inv_dist * inv_dist);
 }
 
+// The float next to f, toward zero (down) or away from it (up), for f > 0:
+// the neighbours of a positive float are its bit pattern ∓ 1 (+∞'s lower
+// neighbour is FLT_MAX). std::nextafter's library call was ~7 % of an
+// importance evaluation (round_up of a region's radius at every one).
+float next_down_positive(float f) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    --bits;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+float next_up_positive(float f) {
+    std::uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    ++bits;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
 float round_down(double v) {
     float f = float(v);
-    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+    if (!(double(f) > v)) return f;
+    return f > 0 ? next_down_positive(f) : std::nextafter(f, -INFINITY);
 }
 float round_up(double v) {
     float f = float(v);
-    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+    if (!(double(f) < v)) return f;
+    return f > 0 && f < INFINITY ? next_up_positive(f) : std::nextafter(f, INFINITY);
 }
 
 }  // namespace

@@ -143,3 +143,47 @@ TEST_CASE("draw counts kept between passes: a later pass shades as one that coun
             }
         }
 }
+
+TEST_CASE("region radii kept between passes: a later pass shades as one that places the "
+          "corners again", "[texel_tables]") {
+    // A bake keeps each texel's region radius (LightingContext::
+    // keep_region_radii: its footprint's farthest corner from the centre),
+    // with which selectors draw for every sample of the texel. A later pass
+    // that takes it from there must give the bits of one that places the
+    // corners again, for the tree drawn by solid angle and by area, with and
+    // without `bsdf`.
+    Scene scene;
+    add_scene(scene);
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, 0, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05}, {Vec3(1.3, 1.3, 0), 0.08},
+        {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(-0.4, -0.3, 0), 0.02}};
+    const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
+    for (const char* light_technique : {"tree/solid-angle", "tree/area"})
+        for (bool with_bsdf : {false, true}) {
+            DirectLightingSettings s;
+            s.techniques.push_back(*parse_technique(light_technique));
+            s.samples = {1};
+            if (with_bsdf) {
+                s.techniques.push_back(*parse_technique("bsdf"));
+                s.samples.push_back(1);
+            }
+            s.strategy = Strategy::OptimalDirect;
+            s.seed = 13;
+            LightingContext keeping(scene, s), placing(scene, s);
+            keeping.keep_region_radii(texels.size());
+            REQUIRE(keeping.region_radii.size() == texels.size());
+            PointLighting kept(keeping), placed(placing);
+            for (const auto& call : calls)
+                for (std::size_t t = 0; t < texels.size(); ++t) {
+                    const SquareFootprint& f = texels[t];
+                    double a[3], a_var[3], b[3], b_var[3];
+                    kept.shade(t, call[0], call[1], f.centre(), &f, a, a_var);
+                    placed.shade(t, call[0], call[1], f.centre(), &f, b, b_var);
+                    INFO(light_technique << (with_bsdf ? " + bsdf" : "") << ", rounds from "
+                                         << call[0] << ", texel " << t);
+                    CHECK(keeping.region_radii[t] > 0);
+                    CHECK(same_bits(a, b));
+                    CHECK(same_bits(a_var, b_var));
+                }
+        }
+}

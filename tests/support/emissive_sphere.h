@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "lights/light.h"
 #include "render/scene.h"
 
 namespace omis::testing {
@@ -38,6 +39,17 @@ inline void add_emissive_sphere(Scene& scene, const Vec3& centre, double radius,
         }
     }
     scene.add_mesh(p, t, radiance);
+}
+
+// bench_cycles.py's emissive_mesh race scene (tests/blender/cycles_scenes.py)
+// without its receiver: a UV sphere of 128 × 64 segments (16,128 triangles,
+// radius 0.3 at (0.2, 0.1, 0.6), Blender's emission 3 × (1, 0.85, 0.7)) under
+// a 0.3 m square light of 40 W at 1.4 m, emitting down (radiance P/(4A), as
+// omis.blender_units.area_light).
+inline void add_race_mesh(Scene& scene) {
+    add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 64, 128, Vec3(3.0, 2.55, 2.1));
+    scene.add_light(make_rect_light(Vec3(0.2, 0.05, 1.4), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
+                                    Vec3(1, 1, 1) * (40.0 / (4.0 * 0.09)), false, kPi));
 }
 
 }  // namespace omis::testing
