@@ -503,7 +503,8 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
     // Points shaded in more than one pass keep where their table draws stand
     // (LightingContext::draw_counts), which a later pass continues from,
-    // whether their centre is in every light's shadow (shadow_verdicts), and
+    // whether their centre is in the shadow of most of their light
+    // (shadow_verdicts), and
     // the reach behind their uniform or power tables (table_reach).
     if (progressive_ || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
