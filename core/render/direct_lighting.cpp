@@ -1245,6 +1245,7 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
         const double weight = luminance(e->radiance) *
                               receiver_cosine_factor(p_.settings.receiver, cos_theta) / s->pdf;
         if (!(weight > 0)) continue;
+        if (!p_.plan.shadow_rays) return false;  // nothing hides it: settled
         middles.push_back({weight, l, s->dir, e->distance});
         total += weight;
     }
