@@ -1221,8 +1221,8 @@ int PointLighting::Impl::draws_per_count_at(std::uint64_t point, const SurfacePo
 // before any of its samples. Not only where every middle is hidden: in
 // shared_image the box hides the square light's middle from 15 % of the
 // texels, where the sphere light alone would have kept them at one draw a
-// count; the square's penumbra there (2 % of the texels, 5–30 % of the mean)
-// held ~55 % of the relMSE (bench/results/error_sources.txt).
+// count; the square's penumbra there (2 % of the texels, 5–20 % of the mean)
+// held 56 % of the relMSE (bench/results/error_sources.txt).
 // By area and that light alone, not by solid angle and every light along the
 // direction: the spherical rectangle's construction and the emitter query
 // cost ~3.3k instructions of a probe's ~4.3k a light on the race's rect
