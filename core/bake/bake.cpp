@@ -503,9 +503,9 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
     // Points shaded in more than one pass keep where their table draws stand
     // (LightingContext::draw_counts), which a later pass continues from,
-    // whether their centre is in every light's shadow (shadow_verdicts), the
-    // reach behind their uniform or power tables (table_reach), and the
-    // radius of their footprint's region (region_radii).
+    // whether their centre is in the shadow of most of their light
+    // (shadow_verdicts), the reach behind their uniform or power tables
+    // (table_reach), and the radius of their footprint's region (region_radii).
     if (progressive_ || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
         context_.keep_shadow_verdicts(layout_.count);

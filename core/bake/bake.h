@@ -58,8 +58,9 @@ struct BakeStats {
     double seconds = 0;
     // samples: the texels' schedules (`samples` = N: N per texel, rounds of
     // the techniques' counts). draws: the directions drawn, all techniques:
-    // as many, except that a texel whose centre sees no light's middle point
-    // (shadowed_texels; DirectLightingSettings::shadowed_draws) draws 4× the
+    // as many, except that a texel whose centre does not see the middle points
+    // of the lights that bring most of its light (shadowed_texels;
+    // DirectLightingSettings::shadowed_draws) draws 4× the
     // counts in each of its rounds. rays_traced: every ray, the extra draws'
     // and the shadow probe's included.
     std::uint64_t samples = 0, draws = 0, rays_traced = 0, mis_systems = 0;

@@ -44,10 +44,11 @@ struct DirectLightingSettings {
     // sample of integrand 0 where the estimator does not use them). false:
     // the general path, which tests compare them with.
     bool fast_paths = true;
-    // Points whose centre sees no integrated light's middle point (a
-    // deterministic probe, kept per texel: the point's draw counts are fixed
-    // before its samples, so estimates stay unbiased) draw this many times
-    // each technique's count a round. 1: no probe.
+    // Points whose centre does not see the middle points of the integrated
+    // lights that bring at least kShadowedShare of the light there unoccluded
+    // (a deterministic probe, kept per texel: the point's draw counts are
+    // fixed before its samples, so estimates stay unbiased) draw this many
+    // times each technique's count a round. 1: no probe.
     int shadowed_draws = 1;
     // The receiving surface's diffuse closure at every point (render/receiver.h);
     // bake() takes it from the scene's mesh.
@@ -142,7 +143,7 @@ public:
     mutable TexelReach table_reach;
     void keep_table_reach(std::size_t points);
     // Per point, where settings.shadowed_draws > 1: its draws per count (1, or
-    // shadowed_draws where its centre sees no light's middle), 0 before its
+    // shadowed_draws where its centre is shadowed: centre_in_shadow), 0 before its
     // first call. The probe behind it is deterministic, so a job of several
     // passes keeps the verdict (keep_shadow_verdicts) and traces the probe's
     // rays once per point instead of once per pass where texel tables are not
@@ -273,8 +274,9 @@ public:
 
     LightingCounters counters;
     // The last point shaded drew this many times each count a round:
-    // settings.shadowed_draws where its centre is in every light's shadow,
-    // else 1 (a bake reports those texels and their extra draws).
+    // settings.shadowed_draws where its centre does not see the middle points
+    // of the lights that bring most of its light, else 1 (a bake reports
+    // those texels and their extra draws).
     int draws_per_count() const;
 
     // What a bake's first pass spends that its later passes do not: the

@@ -100,10 +100,13 @@ constexpr double kMinorWorldPower = 1.0;
 // toward the point and draws a point on one of them by area.
 constexpr int kFewWorldOccluders = 4;
 
-// Texels in every light's shadow draw kShadowedDraws times each count
-// (DirectLightingSettings::shadowed_draws, set through `shadowed_draws` when
-// given) among several comparable local lights.
+// Texels in the shadow of most of their light draw kShadowedDraws times each
+// count (DirectLightingSettings::shadowed_draws, set through `shadowed_draws`
+// when given) among several comparable local lights: those whose centre does
+// not see the middle points of lights that bring at least kShadowedShare of
+// the light there unoccluded (direct_lighting.cpp, centre_in_shadow).
 constexpr int kShadowedDraws = 4;
+constexpr double kShadowedShare = 0.5;
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
                         std::vector<int>& samples, int* shadowed_draws = nullptr);
 

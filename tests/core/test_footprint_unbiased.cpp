@@ -30,22 +30,27 @@ constexpr double kSigmas = 4.0;
 // light point of x-coordinate b ≥ −x (the ray to (b, y', 1) crosses z = 0.5 at
 // (x + b)/2). Light A spans x ∈ [−0.5, 0.5]: seen up to b = −x. Light B spans
 // x ∈ [0.5, 1.1]: hidden from the whole footprint (|x| ≤ 0.15), yet above its
-// horizon, so `uniform` gives it half of the draws.
-void add_scene(Scene& scene) {
+// horizon, so `uniform` gives it half of the draws. With `dim_light`, a small
+// dim light C over x ∈ [−1.5, −1.3], y ∈ [−0.1, 0.1], seen from every such point.
+void add_scene(Scene& scene, bool dim_light = false) {
     scene.add_mesh(std::vector<Vec3>{{0, -50, 0.5}, {50, -50, 0.5}, {50, 50, 0.5}, {0, 50, 0.5}},
                    {{0, 1, 2}, {0, 2, 3}});
     scene.add_light(make_rect_light(Vec3(-0.5, -0.5, 1.0), Vec3(0, 1.0, 0), Vec3(1.0, 0, 0),
                                     Vec3(1, 1, 1), false, kPi));
     scene.add_light(make_rect_light(Vec3(0.5, -0.3, 1.0), Vec3(0, 0.6, 0), Vec3(0.6, 0, 0),
                                     Vec3(2, 2, 2), false, kPi));
+    if (dim_light)
+        scene.add_light(make_rect_light(Vec3(-1.5, -0.1, 1.0), Vec3(0, 0.2, 0), Vec3(0.2, 0, 0),
+                                        Vec3(1, 1, 1), false, kPi));
     scene.commit();
 }
 
 // E/π averaged over the footprint (the box filter a texel bakes): the seen
-// strip of light A at each point, by a 64² midpoint rule. The integrand is
-// smooth over the 0.1 m square (the strip's edge moves with x), so the rule's
-// error (~h² · f'' ≈ 1e-6 relative) is far below the copies' standard error.
-double exact_over(const SquareFootprint& footprint) {
+// strip of light A at each point, and with `dim_light` all of C, by a 64²
+// midpoint rule. The integrand is smooth over the 0.1 m square (the strip's
+// edge moves with x), so the rule's error (~h² · f'' ≈ 1e-6 relative) is far
+// below the copies' standard error.
+double exact_over(const SquareFootprint& footprint, bool dim_light = false) {
     constexpr int n = 64;
     double sum = 0;
     for (int i = 0; i < n; ++i)
@@ -55,6 +60,11 @@ double exact_over(const SquareFootprint& footprint) {
             sum += polygon_irradiance(x, Vec3(0, 0, 1),
                                       {{-0.5, -0.5, 1}, {b, -0.5, 1}, {b, 0.5, 1}, {-0.5, 0.5, 1}}) /
                    kPi;
+            if (dim_light)
+                sum += polygon_irradiance(
+                           x, Vec3(0, 0, 1),
+                           {{-1.5, -0.1, 1}, {-1.3, -0.1, 1}, {-1.3, 0.1, 1}, {-1.5, 0.1, 1}}) /
+                       kPi;
         }
     return sum / (n * n);
 }
@@ -121,20 +131,14 @@ TEST_CASE("footprint table draws: unbiased in a penumbra, in one pass and over p
             }
 }
 
-// shadowed_draws: a footprint whose centre sees neither light's middle point
-// draws 4 times each count a round, the choice fixed by that deterministic
-// probe before any sample. Centred at x = 0.02 the middle (0, 0, 1) of light A
-// is hidden (seen only for b < −0.02) while the footprint's part x < 0 sees a
-// strip of A: the estimate must stay unbiased there (same 4σ test of 2048
-// independent copies), in one pass and over two. A footprint whose centre
-// sees A's middle (x = −0.1) must be shaded exactly as without the setting,
-// and the shadowed one differently (the probe did fire).
-TEST_CASE("shadowed_draws: more draws where the centre is shadowed, unbiased",
-          "[strata][direct]") {
-    Scene scene;
-    add_scene(scene);
-    const SquareFootprint shadowed(Vec3(0.02, 0, 0), 0.05), lit(Vec3(-0.1, 0, 0), 0.05);
-    const double exact = exact_over(shadowed);
+namespace {
+
+// shadowed_draws = 4 against none on `scene`: the footprint `shadowed` must
+// draw differently (the probe fired) and stay unbiased for `exact` (the 4σ
+// test of 2048 independent copies), in one pass and over two; `lit` must be
+// shaded exactly as without the setting.
+void check_shadowed_draws(const Scene& scene, const SquareFootprint& shadowed,
+                          const SquareFootprint& lit, double exact) {
     constexpr int kCopies = 2048;
     auto shade = [&](PointLighting& shader, const SquareFootprint& footprint, std::uint64_t id,
                      bool passes) {
@@ -171,4 +175,35 @@ TEST_CASE("shadowed_draws: more draws where the centre is shadowed, unbiased",
             // A texel id no copy used: a texel's probe verdict is kept under its id.
             CHECK(shade(plain, lit, kCopies, passes) == shade(shader, lit, kCopies, passes));
         }
+}
+
+}  // namespace
+
+// shadowed_draws: a footprint whose centre sees neither light's middle point
+// draws 4 times each count a round, the choice fixed by that deterministic
+// probe before any sample. Centred at x = 0.02 the middle (0, 0, 1) of light A
+// is hidden (seen only for b < −0.02) while the footprint's part x < 0 sees a
+// strip of A: the estimate must stay unbiased there. A footprint whose centre
+// sees A's middle (x = −0.1; B's is hidden, but B brings less than A) is
+// shaded exactly as without the setting.
+TEST_CASE("shadowed_draws: more draws where the centre is shadowed, unbiased",
+          "[strata][direct]") {
+    Scene scene;
+    add_scene(scene);
+    const SquareFootprint shadowed(Vec3(0.02, 0, 0), 0.05), lit(Vec3(-0.1, 0, 0), 0.05);
+    check_shadowed_draws(scene, shadowed, lit, exact_over(shadowed));
+}
+
+// The probe fires where the lights whose middles are hidden bring most of
+// the light (kShadowedShare), not only where every middle is: with the dim
+// light C seen from the whole footprint, at x = 0.02 the hidden middles of A
+// and B still bring far more than half of what the three middle points
+// bring unoccluded (the square's penumbra beside the box in shared_image).
+TEST_CASE("shadowed_draws: more draws where the lights hidden at their middles bring most, "
+          "unbiased",
+          "[strata][direct]") {
+    Scene scene;
+    add_scene(scene, true);
+    const SquareFootprint shadowed(Vec3(0.02, 0, 0), 0.05), lit(Vec3(-0.1, 0, 0), 0.05);
+    check_shadowed_draws(scene, shadowed, lit, exact_over(shadowed, true));
 }
