@@ -80,14 +80,29 @@ std::vector<Config> planar_configs() {
 }
 
 // x 1e-9 under a rect's corner: the light touches the receiver there (Ω ≈ π/2;
-// the rect's Newton solve starts at an edge seen from its own plane). For the
-// polygons only: the ellipse's bounding box touches there, the ellipse does not.
+// the rect's Newton solve starts at an edge seen from its own plane). The ellipse
+// inscribed in the rect does not touch x: it is seen edge-on from just outside it
+// (Ω 5e-9 sr), a cone 2e-9 thick.
 Config touching_corner_config() {
     Config touching{"touching at a corner, 1e-9 off plane", {}, {0, 0, 1}, {0.5, 0.4, 1e-9},
                     {0.5, 0, 0}, {0, 0.4, 0}};
     touching.heavy_tailed = true;
     touching.near_plane = true;
     return touching;
+}
+
+// Ellipses seen edge-on from outside them, h below their plane: the touching
+// corner's ellipse at h = 1e-3, 1e-6 and 1e-9, cones 2e-3 to 2e-9 thick.
+std::vector<Config> grazing_ellipse_configs() {
+    std::vector<Config> configs;
+    for (double h : {1e-3, 1e-6}) {
+        Config c = touching_corner_config();
+        c.name = "edge-on from outside, " + std::to_string(h) + " off plane";
+        c.c.z = h;
+        configs.push_back(c);
+    }
+    configs.push_back(touching_corner_config());
+    return configs;
 }
 
 constexpr int K = 8;  // cells per parameter
@@ -510,7 +525,9 @@ TEST_CASE("rectangle and triangle samplers", "[sampling]") {
 
 TEST_CASE("ellipse samplers", "[sampling]") {
     int seed = 3000;
-    for (const Config& c : planar_configs()) {
+    std::vector<Config> configs = planar_configs();
+    for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
         const double omega = ellipse_solid_angle(c.c - c.x, c.U, c.V);
@@ -548,7 +565,9 @@ double ellipse_cell_prob(const Config& c, int i, int j, const std::function<doub
 
 TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
     int seed = 5000;
-    for (const Config& c : planar_configs()) {
+    std::vector<Config> configs = planar_configs();
+    for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
         const auto se = SphericalEllipse::make(c.x, c.c, c.U, c.V);
