@@ -88,18 +88,17 @@ std::optional<SphericalEllipse> SphericalEllipse::make(const Vec3& x, const Vec3
         if (apart) break;
         if (sweep == 30) return std::nullopt;
     }
-    const double l0 = length(g[0]), l1 = length(g[1]), l2 = length(g[2]);
+    const double q0 = dot(g[0], g[0]), q1 = dot(g[1], g[1]), q2 = dot(g[2], g[2]);
     SphericalEllipse s;
-    s.axis_ = g[2] / l2;
+    s.axis_ = g[2] / std::sqrt(q2);
     // The boosts keep the cone's nappe: the axis points to the light's side.
     if (!(dot(s.axis_, nh) * h > 0)) return std::nullopt;
     s.e1_ = normalize(g[0] - s.axis_ * dot(g[0], s.axis_));
     s.e2_ = cross(s.axis_, s.e1_);
-    const double r0 = std::hypot(l0, l2), r1 = std::hypot(l1, l2);
-    s.sa_ = l0 / r0;
-    s.sb_ = l1 / r1;
-    s.ca_ = l2 / r0;
-    s.cb_ = l2 / r1;
+    s.sa_ = std::sqrt(q0 / (q0 + q2));
+    s.sb_ = std::sqrt(q1 / (q1 + q2));
+    s.ca_ = std::sqrt(q2 / (q0 + q2));
+    s.cb_ = std::sqrt(q2 / (q1 + q2));
     s.to_center_ = to_c;
     s.normal_ = nh;
     const double slack = 1 + kRimTol + kDirectionUlps / std::min(s.sa_, s.sb_);
@@ -117,7 +116,8 @@ SphericalEllipse::Rim SphericalEllipse::rim(double cos_psi, double sin_psi) cons
 }
 
 SphericalEllipse::Rim SphericalEllipse::rim_toward(double lx, double ly) const {
-    const double px = lx / sa_, py = ly / sb_, r = std::hypot(px, py);
+    // (cos ψ, sin ψ) ∝ (lx/sin α, ly/sin β), scaled by sin α sin β (no overflow).
+    const double px = lx * sb_, py = ly * sa_, r = std::sqrt(px * px + py * py);
     return r > 0 ? rim(px / r, py / r) : rim(1, 0);
 }
 
