@@ -39,6 +39,8 @@ public:
     // sin α, sin β: semi-axes of the cone's orthographic image (for tests).
     double sin_a() const { return sa_; }
     double sin_b() const { return sb_; }
+    // The cone's axis, about which the pdf is constant along each azimuth (for tests).
+    const Vec3& axis() const { return axis_; }
 
 private:
     // The cone's boundary at an azimuth: the orthographic image's rim point (x, y),
