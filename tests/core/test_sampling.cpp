@@ -651,6 +651,40 @@ TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
     }
 }
 
+TEST_CASE("spherical ellipse: finite draws and densities down to the light's plane",
+          "[sampling]") {
+    // x's foot at the centre, inside the rim, 1e-12 beside it either way, outside, and
+    // far beside an ellipse; heights from 1e-1 down to 1e-300 on either side.
+    const Vec3 c{0, 0, 0}, U{0.5, 0, 0}, V{0, 0.3, 0};
+    int made = 0;
+    for (double foot : {0.0, 0.4, 0.5 - 1e-12, 0.5 + 1e-12, 0.7, 1e3})
+        for (double h : {1e-1, 1e-3, 1e-6, 1e-9, 1e-12, 1e-15, 1e-30, 1e-300, -1e-9})
+            for (double along : {0.0, 0.6}) {  // along U only, or tilted toward V
+                const Vec3 x{foot * std::cos(along), foot * std::sin(along), -h};
+                INFO("foot " << foot << ", height " << h << ", tilt " << along);
+                const auto se = SphericalEllipse::make(x, c, U, V);
+                // No cone only where products of 1e-300 underflow (the light technique
+                // then draws nothing there, and its density is 0).
+                if (!se) {
+                    CHECK(h == 1e-300);
+                    continue;
+                }
+                ++made;
+                const EllipseLight L{c, U, V};
+                for (int i = 0; i < 16; ++i)
+                    for (int j = 0; j < 16; ++j) {
+                        const DirSample s = se->sample((i + 0.5) / 16, (j + 0.5) / 16);
+                        const double pdf = se->pdf(s.dir);
+                        CHECK(isfinite(s.dir));
+                        CHECK(std::abs(length(s.dir) - 1) < 1e-12);
+                        CHECK((std::isfinite(s.dist) && s.dist > 0));
+                        CHECK((std::isfinite(pdf) && pdf > 0));
+                        CHECK(std::isfinite(L.pdf_solid_angle(x, s.dir)));
+                    }
+            }
+    CHECK(made >= 6 * 2 * 8);  // every height but 1e-300
+}
+
 TEST_CASE("clipped disk: uniform over the unit disk cut by a box", "[sampling]") {
     struct Box {
         double a0, a1, b0, b1;
