@@ -13,11 +13,11 @@ constexpr double kDirectionUlps = 1e-15;
 
 // Boosts a spacelike column u and the timelike column v of the cone's generator
 // apart (u·v = 0 after): the Lorentz boost in their plane, which maps the round cone
-// onto itself, of rapidity ½ ln(|u − v|/|u + v|). Its cosh and sinh from those two
-// lengths, (|p| + |m|)/(2√(|p||m|)) and −2u·v/((|p| + |m|)√(|p||m|)), take no
-// difference of nearly equal numbers; the boost itself is as accurate as the input
-// allows (its cancellation where u ≈ v, x near the rim, is the cone's own sensitivity
-// to x there).
+// onto itself, of rapidity ½ ln(|m|/|p|), p = u + v, m = u − v. Its cosh and sinh
+// from those lengths, (|p| + |m|)/(2√(|p||m|)) and −2u·v/((|p| + |m|)√(|p||m|)), take
+// no difference of nearly equal numbers. Where u ≈ v (x beside the rim) the boost is
+// strong and loses ~ε·size/(x's distance to the rim), the cone's own sensitivity to x
+// there (1e-9 beside a rim and off the plane: sin α within 2e-9 of mpmath's).
 bool boost_apart(Vec3& u, Vec3& v) {
     const double lp = length(u + v), lm = length(u - v);
     const double root = std::sqrt(lp) * std::sqrt(lm);
