@@ -7,42 +7,38 @@ namespace omis {
 namespace {
 
 constexpr double kRimTol = 1e-9;  // relative slack for directions sampled on the rim
+// Absolute slack (radians) of the rim test: a unit vector's components carry a few
+// ulps, which is a large part of a cone's half-angle 1e-9 thick.
+constexpr double kDirectionUlps = 1e-15;
 
-// Eigen-decomposition of a symmetric 3×3 matrix by cyclic Jacobi rotations: on return
-// a's diagonal holds the eigenvalues and v's columns the eigenvectors. Jacobi keeps
-// the small eigenvalue of the cone matrix of a far, tiny light (next to two of size
-// (distance/size)²) to relative precision, which a characteristic polynomial would not.
-void jacobi_eigen(double a[3][3], double v[3][3]) {
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
-    for (int sweep = 0; sweep < 12; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if (off <= 1e-40 * diag) return;
-        for (int p = 0; p < 2; ++p)
-            for (int q = p + 1; q < 3; ++q) {
-                if (a[p][q] == 0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
-                const double t = std::copysign(1.0, theta) /
-                                 (std::abs(theta) + std::sqrt(theta * theta + 1));
-                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
-                for (int k = 0; k < 3; ++k) {  // a ← a·J
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {  // a ← Jᵀ·a
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
+// Boosts a spacelike column u and the timelike column v of the cone's generator
+// apart (u·v = 0 after): the Lorentz boost in their plane, which maps the round cone
+// onto itself, of rapidity ½ ln(|m|/|p|), p = u + v, m = u − v. Its cosh and sinh
+// from those lengths, (|p| + |m|)/(2√(|p||m|)) and −2u·v/((|p| + |m|)√(|p||m|)), take
+// no difference of nearly equal numbers. Where u ≈ v (x beside the rim) the boost is
+// strong and loses ~ε·size/(x's distance to the rim), the cone's own sensitivity to x
+// there (1e-9 beside a rim and off the plane: sin α within 2e-9 of mpmath's).
+bool boost_apart(Vec3& u, Vec3& v) {
+    const double lp = length(u + v), lm = length(u - v);
+    const double root = std::sqrt(lp) * std::sqrt(lm);
+    if (!(root > 0)) return false;
+    const double ch = (lp + lm) / (2 * root), sh = -2 * dot(u, v) / ((lp + lm) * root);
+    const Vec3 u0 = u;
+    u = u0 * ch + v * sh;
+    v = u0 * sh + v * ch;
+    return true;
+}
+
+// Rotates two spacelike columns apart (u·v = 0 after): one-sided Jacobi.
+void rotate_apart(Vec3& u, Vec3& v) {
+    const double g = dot(u, v);
+    if (g == 0) return;
+    const double z = (dot(v, v) - dot(u, u)) / (2 * g);
+    const double t = std::copysign(1.0, z) / (std::abs(z) + std::sqrt(z * z + 1));
+    const double c = 1 / std::sqrt(t * t + 1), s = c * t;
+    const Vec3 u0 = u;
+    u = u0 * c - v * s;
+    v = u0 * s + v * c;
 }
 
 // ∫_{−1}^{a} min(b, √(1 − t²)) dt, the area under a disk's upper half capped at b.
@@ -66,61 +62,75 @@ std::optional<SphericalEllipse> SphericalEllipse::make(const Vec3& x, const Vec3
                                                        const Vec3& axis_a,
                                                        const Vec3& axis_b) {
     const Vec3 to_c = center - x;
-    const double dist = length(to_c), la = length(axis_a), lb = length(axis_b);
-    if (!(dist > 0 && la > 0 && lb > 0)) return std::nullopt;
-    const Vec3 ah = axis_a / la, bh = axis_b / lb, nh = cross(ah, bh);
+    const Vec3 nh = cross(normalize(axis_a), normalize(axis_b));  // axes perpendicular
     const double h = dot(to_c, nh);
-    if (!(std::abs(h) > 0)) return std::nullopt;
-    // A direction d hits the ellipse iff (r1·d)² + (r2·d)² ≤ (r3·d)² with r3·d of the
-    // sign of h: the rows of [axis_a axis_b to_c]⁻¹ scaled by |a||b|. They are written
-    // in a frame whose z is the direction to the centre, where r1 and r2 have no z part.
-    const Frame f(to_c / dist);
-    const Vec3 bl = f.to_local(bh), al = f.to_local(ah), r3 = f.to_local(nh);
-    const Vec3 r1 = Vec3{bl.y, -bl.x, 0} * (dist / la);  // (b̂ × ẑ)·dist/|a|
-    const Vec3 r2 = Vec3{-al.y, al.x, 0} * (dist / lb);  // (ẑ × â)·dist/|b|
-    const double r[3][3] = {{r1.x, r1.y, r1.z}, {r2.x, r2.y, r2.z}, {r3.x, r3.y, r3.z}};
-    double m[3][3], v[3][3];
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) m[i][j] = r[2][i] * r[2][j] - r[0][i] * r[0][j] - r[1][i] * r[1][j];
-    jacobi_eigen(m, v);
-    // One positive eigenvalue (the axis), two negative (the cone's principal planes).
-    int p = 0;
-    for (int i = 1; i < 3; ++i)
-        if (m[i][i] > m[p][p]) p = i;
-    const int q1 = (p + 1) % 3, q2 = (p + 2) % 3;
-    const double lp = m[p][p], l1 = -m[q1][q1], l2 = -m[q2][q2];
-    if (!(lp > 0 && l1 > 0 && l2 > 0)) return std::nullopt;
-    Vec3 axis = f.to_world({v[0][p], v[1][p], v[2][p]});
-    if (dot(axis, nh) * h < 0) axis = -axis;
+    if (!(std::abs(h) > 0) || !isfinite(nh)) return std::nullopt;
+    // The directions to the ellipse are g·(α, β, 1), α² + β² ≤ 1, for the generator
+    // g = [axis_a axis_b to_c]: the round cone k₁² + k₂² ≤ k₃² mapped by g. Lorentz
+    // transforms of the round cone (rotations of the first two columns, boosts of
+    // either with the third) keep the set; once the columns are orthogonal, the
+    // third is the cone's axis and the first two its principal directions with
+    // tan(half-angle) = |g_i|/|g₃|. Working on the columns (one-sided, hyperbolic
+    // Jacobi) rather than on the cone's matrix keeps the precision a matrix of
+    // their products would square away: seen edge-on from 1e-9 off its plane, the
+    // cone is 1e-9 thick, its matrix's eigenvalues 1e-18 apart in relative size.
+    Vec3 g[3] = {axis_a, axis_b, to_c};
+    constexpr double kOrthogonal = 1e-14;  // |cos| between columns taken as 0
+    for (int sweep = 0;; ++sweep) {
+        bool apart = true;
+        for (const auto& [i, j] : {std::pair{0, 2}, std::pair{1, 2}, std::pair{0, 1}}) {
+            const double gij = dot(g[i], g[j]);
+            if (gij * gij <= kOrthogonal * kOrthogonal * dot(g[i], g[i]) * dot(g[j], g[j])) continue;
+            apart = false;
+            if (j == 1) rotate_apart(g[0], g[1]);
+            else if (!boost_apart(g[i], g[2])) return std::nullopt;
+        }
+        if (apart) break;
+        if (sweep == 30) return std::nullopt;
+    }
+    const double q0 = dot(g[0], g[0]), q1 = dot(g[1], g[1]), q2 = dot(g[2], g[2]);
     SphericalEllipse s;
-    s.axis_ = normalize(axis);
-    s.e1_ = normalize(f.to_world({v[0][q1], v[1][q1], v[2][q1]}));
+    s.axis_ = g[2] / std::sqrt(q2);
+    // The boosts keep the cone's nappe: the axis points to the light's side.
+    if (!(dot(s.axis_, nh) * h > 0)) return std::nullopt;
+    s.e1_ = normalize(g[0] - s.axis_ * dot(g[0], s.axis_));
     s.e2_ = cross(s.axis_, s.e1_);
-    // tan²(half-angle) = λp/|λq|, so sin² = λp/(λp + |λq|).
-    s.sa_ = std::sqrt(lp / (lp + l1));
-    s.sb_ = std::sqrt(lp / (lp + l2));
+    s.sa_ = std::sqrt(q0 / (q0 + q2));
+    s.sb_ = std::sqrt(q1 / (q1 + q2));
+    s.ca_ = std::sqrt(q2 / (q0 + q2));
+    s.cb_ = std::sqrt(q2 / (q1 + q2));
     s.to_center_ = to_c;
     s.normal_ = nh;
-    if (!(s.sa_ > 0 && s.sb_ > 0) || !isfinite(s.axis_)) return std::nullopt;
+    const double slack = 1 + kRimTol + kDirectionUlps / std::min(s.sa_, s.sb_);
+    s.rim_slack_ = slack * slack;
+    if (!(s.sa_ > 0 && s.sb_ > 0) || !isfinite(s.axis_) || !isfinite(s.e1_)) return std::nullopt;
     return s;
 }
 
-double SphericalEllipse::sin2_boundary(double lx, double ly) const {
-    const double q = lx * lx / (sa_ * sa_) + ly * ly / (sb_ * sb_);
-    return q > 0 ? std::min(1.0, (lx * lx + ly * ly) / q) : sa_ * sa_;
+SphericalEllipse::Rim SphericalEllipse::rim(double cos_psi, double sin_psi) const {
+    // The rim point (sin α cos ψ, sin β sin ψ) of the orthographic image; cos²θb from
+    // the half-angles' cosines, not 1 − sin²θb (which loses a cone near a hemisphere).
+    const double cx = sa_ * cos_psi, cy = sb_ * sin_psi;
+    const double kx = ca_ * cos_psi, ky = cb_ * sin_psi;
+    return {cx, cy, cx * cx + cy * cy, std::sqrt(kx * kx + ky * ky)};
+}
+
+SphericalEllipse::Rim SphericalEllipse::rim_toward(double lx, double ly) const {
+    // (cos ψ, sin ψ) ∝ (lx/sin α, ly/sin β), scaled by sin α sin β (no overflow).
+    const double px = lx * sb_, py = ly * sa_, r = std::sqrt(px * px + py * py);
+    return r > 0 ? rim(px / r, py / r) : rim(1, 0);
 }
 
 DirSample SphericalEllipse::sample(double u1, double u2) const {
     // A point on the orthographic ellipse's rim: its azimuth has density ∝ sin²θb(φ),
     // and its distance from the centre is sin θb(φ).
     const double psi = 2 * kPi * u1;
-    const double cx = sa_ * std::cos(psi), cy = sb_ * std::sin(psi);
-    const double s2 = std::min(1.0, cx * cx + cy * cy);
-    const double s = std::sqrt(s2);
-    const double omc_b = s2 / (1 + std::sqrt(1 - s2));  // 1 − cos θb, stable
+    const Rim b = rim(std::cos(psi), std::sin(psi));
+    const double s = std::sqrt(b.sin2);
+    const double omc_b = b.sin2 / (1 + b.cos);  // 1 − cos θb, stable
     const double omc = u2 * omc_b;
     const double sin_t = std::sqrt(std::max(0.0, omc * (2 - omc)));
-    const Vec3 w = normalize(axis_ * (1 - omc) + (e1_ * cx + e2_ * cy) * (sin_t / s));
+    const Vec3 w = normalize(axis_ * (1 - omc) + (e1_ * b.x + e2_ * b.y) * (sin_t / s));
     const double den = dot(w, normal_);
     const double t = den != 0 ? dot(to_center_, normal_) / den : 0.0;
     return {w, t > 0 && std::isfinite(t) ? t : length(to_center_)};
@@ -130,17 +140,16 @@ double SphericalEllipse::pdf(const Vec3& w) const {
     const double lz = dot(w, axis_);
     if (!(lz > 0)) return 0;
     const double lx = dot(w, e1_), ly = dot(w, e2_);
-    if (lx * lx / (sa_ * sa_) + ly * ly / (sb_ * sb_) > 1 + kRimTol) return 0;
-    const double cos_b = std::sqrt(1 - sin2_boundary(lx, ly));
-    return (1 + cos_b) / (2 * kPi * sa_ * sb_);
+    if (lx * lx / (sa_ * sa_) + ly * ly / (sb_ * sb_) > rim_slack_) return 0;
+    return (1 + rim_toward(lx, ly).cos) / (2 * kPi * sa_ * sb_);
 }
 
 Point2 SphericalEllipse::invert(const Vec3& w) const {
     const double lx = dot(w, e1_), ly = dot(w, e2_), lz = dot(w, axis_);
     double u1 = std::atan2(ly / sb_, lx / sa_) / (2 * kPi);
     if (u1 < 0) u1 += 1;
-    const double s2b = sin2_boundary(lx, ly);
-    const double omc_b = s2b / (1 + std::sqrt(1 - s2b));
+    const Rim b = rim_toward(lx, ly);
+    const double omc_b = b.sin2 / (1 + b.cos);
     const double omc = (lx * lx + ly * ly) / (1 + std::max(lz, 0.0));
     return {u1, omc_b > 0 ? std::min(1.0, omc / omc_b) : 0.0};
 }

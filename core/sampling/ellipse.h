@@ -10,7 +10,9 @@
 // uniform in [cos θb(φ), 1]. Its solid-angle pdf is (1 + cos θb(φ))/(2π sin α sin β):
 // exact, constant along each azimuth and within a factor 2 of uniform (1/Ω)
 // everywhere, so it behaves like Guillén et al. 2017's area-preserving map without
-// their elliptic integrals.
+// their elliptic integrals. The cone's frame and half-angles come from its generator
+// [axis_a axis_b center − x] made orthogonal by Lorentz transforms (ellipse.cpp), so
+// a light seen edge-on from 1e-9 off its plane keeps its 1e-9-thick cone.
 //
 // ClippedDisk: uniform (area measure) over the unit disk cut by an axis-aligned
 // box, for the part of an ellipse a spread light lets reach x.
@@ -37,13 +39,24 @@ public:
     // sin α, sin β: semi-axes of the cone's orthographic image (for tests).
     double sin_a() const { return sa_; }
     double sin_b() const { return sb_; }
+    // The cone's axis, about which the pdf is constant along each azimuth (for tests).
+    const Vec3& axis() const { return axis_; }
 
 private:
-    // sin² of the boundary angle at the azimuth of the local direction (lx, ly).
-    double sin2_boundary(double lx, double ly) const;
+    // The cone's boundary at an azimuth: the orthographic image's rim point (x, y),
+    // sin²θb = x² + y² and cos θb.
+    struct Rim {
+        double x, y, sin2, cos;
+    };
+    // At the rim parameter ψ (the rim point is (sin α cos ψ, sin β sin ψ)) ...
+    Rim rim(double cos_psi, double sin_psi) const;
+    // ... and at the azimuth of the local direction (lx, ly).
+    Rim rim_toward(double lx, double ly) const;
     Vec3 axis_, e1_, e2_;       // cone frame (world)
     Vec3 to_center_, normal_;   // the light's plane, for the distance along a sample
-    double sa_ = 0, sb_ = 0;
+    double sa_ = 0, sb_ = 0;    // sines of the half-angles
+    double ca_ = 0, cb_ = 0;    // and their cosines
+    double rim_slack_ = 1;      // (lx/sin α)² + (ly/sin β)² beyond this is outside
 };
 
 class ClippedDisk {

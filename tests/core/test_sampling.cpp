@@ -40,21 +40,14 @@ struct Config {
     // ellipse's, whose cone is 1e-7..1e-9 thick, to 1e-4).
     bool near_plane = false;
     double invert_tol = 1e-6;
-    // Relative accuracy of the equal-area polygon reference for the ellipse's solid
-    // angle (see ellipse_solid_angle).
-    double reference_tol = 1e-8;
 };
 
 std::vector<Config> planar_configs() {
     const Vec3 up{0, 0, 1};
     Config huge{"huge near-hemispherical", {}, up, {0, 0, 1}, {1e3, 0, 0}, {0, 1e3, 0}};
     huge.heavy_tailed = true;
-    // 1e-6 below the centre the cone is within 1e-5 sr of a hemisphere and the
-    // equal-area polygon reference itself moves by 7e-7 (relative) between 8192 and
-    // 131072 vertices: the reference, not the sampler, limits the check.
     Config below{"x 1e-6 below centre", {}, up, {0, 0, 1e-6}, {0.5, 0, 0}, {0, 0.3, 0}};
     below.heavy_tailed = true;
-    below.reference_tol = 1e-6;
     Config off_plane{"x 1e-9 off plane, outside", {0, 0, 1e-6 - 1e-9}, up, {2, 0, 1e-6},
                      {0.5, 0, 0}, {0, 0.5, 0}};
     off_plane.near_plane = true;
@@ -80,14 +73,39 @@ std::vector<Config> planar_configs() {
 }
 
 // x 1e-9 under a rect's corner: the light touches the receiver there (Ω ≈ π/2;
-// the rect's Newton solve starts at an edge seen from its own plane). For the
-// polygons only: the ellipse's bounding box touches there, the ellipse does not.
+// the rect's Newton solve starts at an edge seen from its own plane). The ellipse
+// inscribed in the rect does not touch x: it is seen edge-on from just outside it
+// (Ω 5e-9 sr), a cone 2e-9 thick.
 Config touching_corner_config() {
     Config touching{"touching at a corner, 1e-9 off plane", {}, {0, 0, 1}, {0.5, 0.4, 1e-9},
                     {0.5, 0, 0}, {0, 0.4, 0}};
     touching.heavy_tailed = true;
     touching.near_plane = true;
     return touching;
+}
+
+// Disks and ellipses seen edge-on and grazing: x h below the light's plane outside
+// it (the touching corner's ellipse at h = 1e-3, 1e-6, 1e-9: cones 2e-3 to 2e-9
+// thick; a disk whose rim passes 1e-6 from x's foot), and x 1e-9 below the plane
+// 1e-6 inside a disk's rim, where the cone is all but a hemisphere, tilted.
+std::vector<Config> grazing_ellipse_configs() {
+    std::vector<Config> configs;
+    for (double h : {1e-3, 1e-6}) {
+        Config c = touching_corner_config();
+        c.name = "edge-on from outside, " + std::to_string(h) + " off plane";
+        c.c.z = h;
+        configs.push_back(c);
+    }
+    configs.push_back(touching_corner_config());
+    for (double beside : {1e-6, -1e-6}) {
+        Config c{beside > 0 ? "1e-6 outside a disk's rim, 1e-9 off plane"
+                            : "1e-6 inside a disk's rim, 1e-9 off plane",
+                 {}, {0, 0, 1}, {0.5 + beside, 0, 1e-9}, {0.5, 0, 0}, {0, 0.5, 0}};
+        c.heavy_tailed = true;
+        c.near_plane = true;
+        configs.push_back(c);
+    }
+    return configs;
 }
 
 constexpr int K = 8;  // cells per parameter
@@ -159,15 +177,81 @@ std::vector<Vec3> ellipse_cell(const Vec3& A, const Vec3& B, int i, int j, int m
     return v;
 }
 
-// Solid angle of an ellipse: equal-area 8192-gon (error ~1e-8 relative).
-double ellipse_solid_angle(const Vec3& to_center, const Vec3& A, const Vec3& B) {
-    const int m = 8192;
-    const double step = 2 * kPi / m, k = std::sqrt(step / std::sin(step));
-    std::vector<Vec3> off;
-    for (int i = 0; i < m; ++i) off.push_back((A * std::cos(i * step) + B * std::sin(i * step)) * k);
-    return polygon_solid_angle(to_center, off);
+// ∫ f over [a, b] by adaptive Simpson to absolute tolerance tol, from 64 panels so
+// that a feature 1e-6 wide (x's foot that near the rim) is seen by the first pass.
+double adaptive_simpson(const std::function<double(double)>& f, double a, double b, double tol) {
+    std::function<double(double, double, double, double, double, double, double, int)> step =
+        [&](double lo, double hi, double flo, double fmid, double fhi, double whole, double eps,
+            int depth) {
+            const double mid = 0.5 * (lo + hi), ql = 0.5 * (lo + mid), qr = 0.5 * (mid + hi);
+            const double fql = f(ql), fqr = f(qr);
+            const double left = (mid - lo) / 6 * (flo + 4 * fql + fmid);
+            const double right = (hi - mid) / 6 * (fmid + 4 * fqr + fhi);
+            const double diff = left + right - whole;
+            if (depth == 0 || std::abs(diff) <= 15 * eps) return left + right + diff / 15;
+            return step(lo, mid, flo, fql, fmid, left, 0.5 * eps, depth - 1) +
+                   step(mid, hi, fmid, fqr, fhi, right, 0.5 * eps, depth - 1);
+        };
+    const int panels = 64;
+    double sum = 0;
+    for (int k = 0; k < panels; ++k) {
+        const double lo = a + (b - a) * k / panels, hi = a + (b - a) * (k + 1) / panels;
+        const double flo = f(lo), fmid = f(0.5 * (lo + hi)), fhi = f(hi);
+        sum += step(lo, hi, flo, fmid, fhi, (hi - lo) / 6 * (flo + 4 * fmid + fhi), tol / panels, 40);
+    }
+    return sum;
 }
 
+// ∫ pdf dΩ over ellipse cell (ring i, sector j of ellipse_bin) seen from x, for a pdf
+// constant along each azimuth about `axis` (1 for the solid angle: any axis the
+// cell's directions keep within 90°). By Stokes, dΩ = d((1 − cos θ) dφ) about the
+// axis, so the integral is ∮ pdf·axis·(w × dw)/(1 + axis·w) along the cell's exact
+// boundary (two elliptic arcs, two radial segments), w the unit direction from x:
+// no polygon, whose chords (4e-8 off the rim at 8192 sides) would move a cell seen
+// from 1e-6 beside the rim by percents. The quadrature's tolerance is rel times the
+// cell's ∮|…| (a coarse pass); the result in absolute value (the orientation).
+double ellipse_cell_integral(const Config& c, const Vec3& axis, int i, int j,
+                             const std::function<double(const Vec3&)>& pdf, double rel) {
+    const double r0 = std::sqrt(double(i) / K), r1 = std::sqrt(double(i + 1) / K);
+    const double f0 = 2 * kPi * j / K, f1 = 2 * kPi * (j + 1) / K;
+    const Vec3 to_c = c.c - c.x;
+    // axis × (c − x) once: for a far light nearly along the axis it is small, and
+    // forming it at each point would add rounding noise that no refinement removes.
+    const Vec3 axis_to_c = cross(axis, to_c);
+    // The integrand at (ρ, ψ), the boundary moving by (dρ, dψ) per unit parameter.
+    auto along = [&](double rho, double psi, double drho, double dpsi) {
+        const Vec3 radial = c.U * std::cos(psi) + c.V * std::sin(psi);
+        const Vec3 tangent = c.V * std::cos(psi) - c.U * std::sin(psi);
+        const Vec3 d = to_c + radial * rho;
+        const Vec3 dd = radial * drho + tangent * (rho * dpsi);
+        const double d2 = dot(d, d);
+        const Vec3 w = d / std::sqrt(d2);
+        // axis·(d × dd) = dd·(axis × d)
+        return pdf(w) * dot(dd, axis_to_c + cross(axis, radial) * rho) / (d2 * (1 + dot(axis, w)));
+    };
+    const std::function<double(double)> pieces[4] = {
+        [&](double t) { return along(r1, f0 + (f1 - f0) * t, 0, f1 - f0); },
+        [&](double t) { return along(r1 + (r0 - r1) * t, f1, r0 - r1, 0); },
+        [&](double t) { return r0 > 0 ? along(r0, f1 + (f0 - f1) * t, 0, f0 - f1) : 0.0; },
+        [&](double t) { return along(r0 + (r1 - r0) * t, f0, r1 - r0, 0); }};
+    double scale = 0;
+    for (const auto& f : pieces)
+        for (int k = 0; k <= 256; ++k) scale += std::abs(f(k / 256.0)) / 257;
+    double sum = 0;
+    for (const auto& f : pieces) sum += adaptive_simpson(f, 0, 1, rel * scale);
+    return std::abs(sum);
+}
+
+// Solid angle of the configuration's ellipse: the sum of its cells (the direction to
+// the centre keeps every direction to the light within 90°).
+double ellipse_solid_angle(const Config& c) {
+    double omega = 0;
+    for (int i = 0; i < K; ++i)
+        for (int j = 0; j < K; ++j)
+            omega += ellipse_cell_integral(c, normalize(c.c - c.x), i, j,
+                                           [](const Vec3&) { return 1.0; }, 1e-12);
+    return omega;
+}
 }  // namespace
 
 TEST_CASE("solid angle formula matches closed forms", "[sampling]") {
@@ -510,45 +594,22 @@ TEST_CASE("rectangle and triangle samplers", "[sampling]") {
 
 TEST_CASE("ellipse samplers", "[sampling]") {
     int seed = 3000;
-    for (const Config& c : planar_configs()) {
+    std::vector<Config> configs = planar_configs();
+    for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
-        const double omega = ellipse_solid_angle(c.c - c.x, c.U, c.V);
+        const double omega = ellipse_solid_angle(c);
         check_disk_samplers("ellipse", L, L, c.x, c.n, omega,
                             DiskAllowances{!c.heavy_tailed, c.invert_tol}, seed);
     }
 }
 
-// Probability of an ellipse cell (ring i, sector j of ellipse_bin) under a pdf that is
-// not constant: the cell is cut into sub×sub curved quads, each weighted by its exact
-// solid angle times the pdf at its middle (midpoint rule, error O(sub⁻²) ≈ 1e-4 here,
-// far below the 3.6% noise of a cell's count).
-double ellipse_cell_prob(const Config& c, int i, int j, const std::function<double(const Vec3&)>& pdf,
-                         int sub = 6) {
-    double p = 0;
-    for (int a = 0; a < sub; ++a)
-        for (int b = 0; b < sub; ++b) {
-            const double q0 = (i + double(a) / sub) / K, q1 = (i + double(a + 1) / sub) / K;
-            const double f0 = 2 * kPi * (j + double(b) / sub) / K;
-            const double f1 = 2 * kPi * (j + double(b + 1) / sub) / K;
-            const int m = 4;
-            std::vector<Vec3> poly;
-            auto at = [&](double q, double f) {
-                return (c.U * std::cos(f) + c.V * std::sin(f)) * std::sqrt(q);
-            };
-            for (int k = 0; k <= m; ++k) poly.push_back(at(q1, f0 + (f1 - f0) * k / m));
-            if (q0 == 0) poly.push_back(Vec3{});
-            else
-                for (int k = m; k >= 0; --k) poly.push_back(at(q0, f0 + (f1 - f0) * k / m));
-            const Vec3 mid = (c.c - c.x) + at(0.5 * (q0 + q1), 0.5 * (f0 + f1));
-            p += polygon_solid_angle(c.c - c.x, poly) * pdf(normalize(mid));
-        }
-    return p;
-}
-
 TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
     int seed = 5000;
-    for (const Config& c : planar_configs()) {
+    std::vector<Config> configs = planar_configs();
+    for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
         const auto se = SphericalEllipse::make(c.x, c.c, c.U, c.V);
@@ -566,14 +627,16 @@ TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
             const auto h = L.intersect(c.x, w);
             return h ? ellipse_bin(h->uv) : -1;
         };
+        // Cells' probabilities to 1e-10 of their scale each (quadrature): their sum
+        // meets 1 to 1e-8.
         for (int i = 0; i < K; ++i)
-            for (int j = 0; j < K; ++j) t.cell_prob.push_back(ellipse_cell_prob(c, i, j, t.pdf));
-        t.prob_sum_tol = 2e-3;
-        t.measure = ellipse_solid_angle(c.c - c.x, c.U, c.V);
+            for (int j = 0; j < K; ++j)
+                t.cell_prob.push_back(ellipse_cell_integral(c, se->axis(), i, j, t.pdf, 1e-10));
+        t.prob_sum_tol = 1e-8;
+        t.measure = ellipse_solid_angle(c);
         // Near-plane points see a cone 1e-7..1e-9 thick (or its flat rim): a direction
         // fixes its place in it only to ~ε/thickness, as for the parallel samplers.
         t.invert_tol = c.near_plane ? 1e-4 : 1e-6;
-        t.measure_tol = c.reference_tol;
         // The pdf is exact and within 2× of uniform: (1 + cos θb)/(2π sin α sin β) lies
         // in [1/Ω, 2/Ω]·(its own normalisation), so its extremes bracket 1/Ω.
         double lo = 1e300, hi = 0;
@@ -586,6 +649,40 @@ TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
         CHECK(hi <= 2 * lo * (1 + 1e-9));
         run_sampler_check(t, seed++);
     }
+}
+
+TEST_CASE("spherical ellipse: finite draws and densities down to the light's plane",
+          "[sampling]") {
+    // x's foot at the centre, inside the rim, 1e-12 beside it either way, outside, and
+    // far beside an ellipse; heights from 1e-1 down to 1e-300 on either side.
+    const Vec3 c{0, 0, 0}, U{0.5, 0, 0}, V{0, 0.3, 0};
+    int made = 0;
+    for (double foot : {0.0, 0.4, 0.5 - 1e-12, 0.5 + 1e-12, 0.7, 1e3})
+        for (double h : {1e-1, 1e-3, 1e-6, 1e-9, 1e-12, 1e-15, 1e-30, 1e-300, -1e-9})
+            for (double along : {0.0, 0.6}) {  // along U only, or tilted toward V
+                const Vec3 x{foot * std::cos(along), foot * std::sin(along), -h};
+                INFO("foot " << foot << ", height " << h << ", tilt " << along);
+                const auto se = SphericalEllipse::make(x, c, U, V);
+                // No cone only where products of 1e-300 underflow (the light technique
+                // then draws nothing there, and its density is 0).
+                if (!se) {
+                    CHECK(h == 1e-300);
+                    continue;
+                }
+                ++made;
+                const EllipseLight L{c, U, V};
+                for (int i = 0; i < 16; ++i)
+                    for (int j = 0; j < 16; ++j) {
+                        const DirSample s = se->sample((i + 0.5) / 16, (j + 0.5) / 16);
+                        const double pdf = se->pdf(s.dir);
+                        CHECK(isfinite(s.dir));
+                        CHECK(std::abs(length(s.dir) - 1) < 1e-12);
+                        CHECK((std::isfinite(s.dist) && s.dist > 0));
+                        CHECK((std::isfinite(pdf) && pdf > 0));
+                        CHECK(std::isfinite(L.pdf_solid_angle(x, s.dir)));
+                    }
+            }
+    CHECK(made >= 6 * 2 * 8);  // every height but 1e-300
 }
 
 TEST_CASE("clipped disk: uniform over the unit disk cut by a box", "[sampling]") {
