@@ -423,7 +423,7 @@ struct PointLighting::Impl {
 
     // Spherical rectangles/triangles and elliptic cones depend on the point
     // only: build each once per point instead of once per sample and pdf
-    // evaluation (an ellipse's cone takes an eigen-decomposition: 39 % of a
+    // evaluation (an ellipse's cone takes a Jacobi orthogonalisation: 39 % of a
     // spread-disk bake when built per evaluation). Skipped for scenes with
     // very many lights, where the table would not pay.
     struct SolidAngleCache {
