@@ -339,6 +339,15 @@ struct PointLighting::Impl {
     // Light l's own part of the integrand along w (visible from x or not).
     Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
                               const Vec3& w);
+    // light_integrand before its shadow ray: light l's radiance toward x
+    // along w, the receiver's cosine factor and the emitting point's
+    // distance; none where w is below x's horizon or l sends nothing along it.
+    struct Unoccluded {
+        Vec3 radiance;
+        double cosine_factor, distance;
+    };
+    std::optional<Unoccluded> light_unoccluded(std::uint32_t l, const Vec3& x, const Vec3& n,
+                                               const Vec3& w) const;
     // Whether a shadow ray from x along w meets something before light l's
     // emitting point `distance` away (false where no shadow rays are traced).
     bool light_occluded(std::uint32_t l, const Vec3& x, const Vec3& ng, const Vec3& w,
@@ -1081,15 +1090,20 @@ PointLighting::Impl::Integrand PointLighting::Impl::light_integrand(std::uint32_
                                                                     const Vec3& ng,
                                                                     const Vec3& w) {
     Integrand f;
-    const double cos_theta = dot(n, w);
-    if (!(cos_theta > 0)) return f;
-    const Light& light = p_.scene.lights()[l];
-    const auto e = emitted_radiance(light, x, w);
-    if (!e || !(luminance(e->radiance) > 0)) return f;
-    if (light_occluded(l, x, ng, w, e->distance)) return f;
-    (light.visible_to_bsdf ? f.main : f.hidden) =
-        e->radiance * receiver_cosine_factor(p_.settings.receiver, cos_theta);
+    const auto u = light_unoccluded(l, x, n, w);
+    if (!u || light_occluded(l, x, ng, w, u->distance)) return f;
+    (p_.scene.lights()[l].visible_to_bsdf ? f.main : f.hidden) = u->radiance * u->cosine_factor;
     return f;
+}
+
+std::optional<PointLighting::Impl::Unoccluded> PointLighting::Impl::light_unoccluded(
+    std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& w) const {
+    const double cos_theta = dot(n, w);
+    if (!(cos_theta > 0)) return std::nullopt;
+    const auto e = emitted_radiance(p_.scene.lights()[l], x, w);
+    if (!e || !(luminance(e->radiance) > 0)) return std::nullopt;
+    return Unoccluded{e->radiance, receiver_cosine_factor(p_.settings.receiver, cos_theta),
+                      e->distance};
 }
 
 bool PointLighting::Impl::light_occluded(std::uint32_t l, const Vec3& x, const Vec3& ng,
@@ -1242,18 +1256,15 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
     middles.clear();
     double total = 0;
     for (std::uint32_t l : p_.integrated) {
-        const Light& light = p_.scene.lights()[l];
-        const auto s = sample_light(light, ShapeSampler::Area, p.x, p.n, 0.5, 0.5);
+        const auto s =
+            sample_light(p_.scene.lights()[l], ShapeSampler::Area, p.x, p.n, 0.5, 0.5);
         if (!s || !(s->pdf > 0)) continue;
-        const double cos_theta = dot(p.n, s->dir);
-        if (!(cos_theta > 0)) continue;
-        const auto e = emitted_radiance(light, p.x, s->dir);
-        if (!e) continue;
-        const double weight = luminance(e->radiance) *
-                              receiver_cosine_factor(p_.settings.receiver, cos_theta) / s->pdf;
+        const auto u = light_unoccluded(l, p.x, p.n, s->dir);
+        if (!u) continue;
+        const double weight = luminance(u->radiance) * u->cosine_factor / s->pdf;
         if (!(weight > 0)) continue;
         if (!p_.plan.shadow_rays) return false;  // nothing hides it: settled
-        middles.push_back({weight, l, s->dir, e->distance});
+        middles.push_back({weight, l, s->dir, u->distance});
         total += weight;
     }
     std::sort(middles.begin(), middles.end(),
