@@ -26,6 +26,9 @@ Per scene:
   (unbiased) at a long time budget for omis; each reference is the mean
   of two independent halves, whose difference estimates the reference's own
   noise, which is subtracted from every relMSE (printed as `ref floor`).
+  A cell whose relMSE is below two standard errors of that difference
+  (taken over texels) is not resolved by the references: it is reported at
+  that resolution and marked "<" (its ratio is an upper bound).
   The two references are checked against each other (aggregate bias and the
   share of texels agreeing within 4σ, as the agreement test does).
 - relMSE = mean over covered interior texels of (x − r)² / (r² + ε²), grey =
@@ -114,10 +117,15 @@ class Reference:
         self.eps2 = (0.01 * self.value[mask].mean()) ** 2
 
     def rel_mse(self, x):
+        """relMSE of x and how finely it is resolved: two standard errors of
+        the mean over texels. Once the reference's own noise (subtracted
+        texel by texel) is larger than x's error, the difference can come out
+        near zero or negative; below that resolution a cell is reported at it
+        (an upper bound) instead."""
         m = self.mask
         r = self.value[m]
-        d = (x[m] - r) ** 2 - self.var[m]   # subtract the reference's own noise
-        return float(np.mean(d / (r * r + self.eps2)))
+        d = ((x[m] - r) ** 2 - self.var[m]) / (r * r + self.eps2)  # minus the reference's noise
+        return float(np.mean(d)), float(2.0 * np.std(d) / np.sqrt(d.size))
 
     def floor(self):
         m = self.mask
@@ -197,23 +205,31 @@ def run_scene(name, args):
         for j in range(args.repeats):
             seed = 10 + i + 100 * j
             x, t = cycles_run(objects, image, spp, seed)
+            rel_mse, resolution = ref_c.rel_mse(x)
             runs["cycles"].append(dict(seconds=t, bake_seconds=t, samples_per_texel=spp,
-                                       rel_mse=ref_c.rel_mse(x)))
+                                       rel_mse=rel_mse, resolution=resolution))
             for strategy, label in (("balance", "omis balance"),
                                     ("optimal-direct", "omis optimal")):
                 if args.equal_samples:  # Cycles' sample count, no time limit
                     x, t, s, _ = omis_run(objects, image, strategy, seed + 10, samples=spp)
                 else:
                     x, t, s, _ = omis_run(objects, image, strategy, seed + 10, seconds=budget)
+                rel_mse, resolution = ref_o.rel_mse(x)
                 runs[label].append(dict(seconds=t, bake_seconds=s["bake_seconds"],
                                         samples_per_texel=s["samples_per_texel"],
                                         # the work: shadowed texels draw more per sample
                                         draws_per_texel=s.get("draws_per_texel",
                                                               s["samples_per_texel"]),
-                                        rel_mse=ref_o.rel_mse(x)))
+                                        rel_mse=rel_mse, resolution=resolution))
         for label in STRATEGIES:
             mean = {key: float(np.mean([run[key] for run in runs[label]]))
                     for key in runs[label][0]}
+            # Below the references' resolution omis' cell is reported at it:
+            # its ratio is then an upper bound (marked "<"); Cycles' unresolved
+            # cells stay out of its fit (cycles_at) rather than flatter omis.
+            mean["unresolved"] = mean["rel_mse"] < mean["resolution"]
+            if mean["unresolved"] and label != "cycles":
+                mean["rel_mse"] = mean["resolution"]
             rows.append(dict(scene=name, strategy=label, budget=budget,
                              ref_floor=(ref_c if label == "cycles" else ref_o).floor(), **mean))
         r = rows[-3:]
@@ -235,7 +251,8 @@ def cycles_at(rows, scene, seconds, key="seconds"):
     from 2 to 32), so a line through 4–180 spp put Cycles' error at 2 spp 1.6×
     too low and doubled omis' /C@spp there (bench/results/low_spp.txt)."""
     pts = [(r[key], r["rel_mse"]) for r in rows
-           if r["scene"] == scene and r["strategy"] == "cycles" and r["rel_mse"] > 0]
+           if r["scene"] == scene and r["strategy"] == "cycles" and r["rel_mse"] > 0
+           and not r.get("unresolved")]
     t = np.log([p[0] for p in pts])
     e = np.log([p[1] for p in pts])
     if len(set(t)) < 2:  # one sample count at every budget (a loaded machine): no slope
@@ -280,12 +297,14 @@ def table(rows, summaries, budgets):
                 lines.append(f"{scene:<15} {budget:>6g} {r['strategy']:<13} {r['seconds']:>8.2f} "
                              f"{r['samples_per_texel']:>7.0f} {r['rel_mse']:>9.2e} "
                              f"{1.0 if own else ratio:>8.2f} {1.0 if own else at_spp:>7.2f}"
-                             + ("" if inside else "*"))
+                             + ("" if inside else "*")
+                             + ("<" if r.get("unresolved") and not own else ""))
     lines.append("")
     lines.append("relMSE of omis / relMSE of Cycles at equal wall time (geometric mean over the "
                  "budgets; Cycles interpolated by a log-log quadratic fit; goal: optimal ≤ 0.5)")
     lines.append("(@spp: optimal's relMSE / Cycles' at the same samples per texel, geometric mean "
-                 "over the counts inside Cycles' measured range; * marks the others)")
+                 "over the counts inside Cycles' measured range; * marks the others; < marks "
+                 "cells below the references' resolution, reported at it: upper bounds)")
     lines.append(f"{'scene':<15} {'balance':>8} {'optimal':>8} {'goal':>5}  {'@spp':>6} "
                  f"{'Cycles t0 (s)':>13} {'ms/spp':>7} {'refs: bias':>10} {'agree':>6}")
     for s in summaries:
@@ -410,8 +429,8 @@ def main():
         f.write(text + "\n")
     with open(os.path.join(out, "bench_cycles.csv"), "w", newline="") as f:
         fields = ["scene", "strategy", "budget", "seconds", "bake_seconds",
-                  "samples_per_texel", "draws_per_texel", "rel_mse", "ref_floor", "ratio_vs_cycles",
-                  "ratio_at_spp"]
+                  "samples_per_texel", "draws_per_texel", "rel_mse", "resolution", "unresolved", "ref_floor",
+                  "ratio_vs_cycles", "ratio_at_spp"]
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
