@@ -66,6 +66,15 @@ struct alignas(64) Light {
     double power(double scene_radius) const;
 };
 
+// Starts reading the first two cache lines of a light's record, all that an
+// emissive triangle's sample reads (among 100k lights each is a cache miss);
+// reads nothing itself, so the pointer may be any address.
+inline void prefetch_record(const Light* light) {
+    const char* record = reinterpret_cast<const char*>(light);
+    __builtin_prefetch(record);
+    __builtin_prefetch(record + 64);
+}
+
 // Factories validate and throw std::invalid_argument naming the problem
 // (zero area, NaN, negative emission, non-perpendicular edges, ...).
 Light make_rect_light(const Vec3& corner, const Vec3& edge_u, const Vec3& edge_v,

@@ -354,11 +354,7 @@ struct PointLighting::Impl {
                         double distance);
     // Starts reading the first two cache lines of light l's record, all that
     // an emissive triangle's sample reads (light.h).
-    void prefetch_light(std::uint32_t l) const {
-        const char* record = reinterpret_cast<const char*>(&p_.scene.lights()[l]);
-        __builtin_prefetch(record);
-        __builtin_prefetch(record + 64);
-    }
+    void prefetch_light(std::uint32_t l) const { prefetch_record(&p_.scene.lights()[l]); }
     // GeometryScene::ListedLight: light l's record and its tree pmf's.
     static void prefetch_listed(void* self, std::uint32_t l) {
         const Impl& impl = *static_cast<const Impl*>(self);

@@ -279,7 +279,7 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
 
 LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
                              const std::vector<std::uint32_t>& ids, double scene_radius)
-    : kind_(kind), ids_(ids), per_light_(lights.size()) {
+    : kind_(kind), ids_(ids), records_(lights.data()), per_light_(lights.size()) {
     for (std::uint32_t id : ids_) {
         if (id >= lights.size() || per_light_[id].role != PerLight::Absent)
             throw std::invalid_argument("ids: light " + std::to_string(id) +
@@ -591,7 +591,9 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
 // mostly: the position a uniform u would take among them is a good first
 // guess, and the search gallops out from it. Among 100k lights a binary
 // search over the whole range waited on a cache miss at nearly every step;
-// this one reads the guess's line and seldom another.
+// this one reads the guess's line and seldom another. The guess is the
+// answer for about 2 draws in 3 (99k emissive triangles): its light's record,
+// which the caller reads next, is started on too.
 std::uint32_t LightSelector::position_in(std::uint32_t begin, std::uint32_t end, double u) const {
     const double target = cdf_point(begin, end, u);
     // The last position p in [begin, end) with order_cdf_[p] <= target (begin
@@ -600,7 +602,7 @@ std::uint32_t LightSelector::position_in(std::uint32_t begin, std::uint32_t end,
     auto below = [&](std::uint32_t p) { return p == begin || order_cdf_[p] <= target; };
     const std::uint32_t guess =
         std::min(begin + std::uint32_t(u * double(end - begin)), end - 1);
-    __builtin_prefetch(&order_light_[guess]);
+    prefetch_record(records_ + order_light_[guess]);
     // Bracket the answer in [lo, hi] by steps of 1, 2, 4, … away from the guess.
     std::uint32_t lo = begin, hi = end - 1;
     if (below(guess)) {

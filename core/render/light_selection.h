@@ -238,6 +238,10 @@ private:
 
     Kind kind_ = Kind::Uniform;
     std::vector<std::uint32_t> ids_;
+    // The records of the lights the selector was built on (the scene's,
+    // which outlive it): a cluster's draw starts reading its likely light's
+    // record while it searches (position_in). Prefetched, never read.
+    const Light* records_ = nullptr;
     // Per light id, all that pmf() reads about a light, side by side (one
     // cache miss among 100k lights).
     struct PerLight {
