@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "sampling/spherical.h"
 #include "sampling/warp.h"
@@ -57,11 +58,21 @@ public:
     }
     // Solid angle: 0 where w misses the shape.
     double pdf(const Vec3& w) const {
-        if (!(shape_.pdf(w) > 0)) return 0.0;
-        return pdf_piecewise_bilinear(shape_.invert(w), w_, kPatches) / shape_.solid_angle();
+        const std::optional<Point2> u = invert_if_hit(shape_, w);
+        if (!u) return 0.0;
+        return pdf_piecewise_bilinear(*u, w_, kPatches) / shape_.solid_angle();
     }
 
 private:
+    // shape.invert(w) where w hits the shape, else empty.
+    template <class Shape>
+    static std::optional<Point2> invert_if_hit(const Shape& shape, const Vec3& w) {
+        if (!(shape.pdf(w) > 0)) return std::nullopt;
+        return shape.invert(w);
+    }
+    static std::optional<Point2> invert_if_hit(const SphericalTriangle& shape, const Vec3& w) {
+        return shape.invert_if_hit(w);
+    }
     SphericalShape shape_;
     double w_[kNodes];
 };

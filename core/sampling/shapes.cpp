@@ -57,6 +57,17 @@ double area_pdf(const std::optional<ShapeHit>& h, const Vec3& w, const Vec3& uni
     return cosl > 0 ? h->t * h->t / (area * cosl) : 0.0;
 }
 
+// A flat light's unit normal and area from one cross product c of its edges
+// (area = scale·|c|), as normalize(c) and area() give them.
+struct NormalAndArea {
+    Vec3 normal;
+    double area;
+};
+NormalAndArea normal_and_area(const Vec3& c, double scale) {
+    const double len = length(c);
+    return {c / len, scale * len};
+}
+
 // Distance along w to the plane (x + a, normal n), ignoring the light's extent: used
 // for directions that a sampler already placed on the light.
 double plane_distance(const Vec3& a, const Vec3& n, const Vec3& w) {
@@ -85,12 +96,15 @@ double RectLight::solid_angle(const Vec3& x) const {
 }
 
 std::optional<LightSample> RectLight::sample_area(const Vec3& x, double u1, double u2) const {
-    return area_sample_record((corner - x) + edge_u * u1 + edge_v * u2,
-                              normalize(cross(edge_u, edge_v)), area());
+    const NormalAndArea f = normal_and_area(cross(edge_u, edge_v), 1.0);
+    return area_sample_record((corner - x) + edge_u * u1 + edge_v * u2, f.normal, f.area);
 }
 
 double RectLight::pdf_area(const Vec3& x, const Vec3& w) const {
-    return area_pdf(intersect(x, w), w, normalize(cross(edge_u, edge_v)), area());
+    const auto hit = intersect(x, w);
+    if (!hit) return 0.0;
+    const NormalAndArea f = normal_and_area(cross(edge_u, edge_v), 1.0);
+    return area_pdf(hit, w, f.normal, f.area);
 }
 
 std::optional<LightSample> RectLight::sample_solid_angle(const Vec3& x, double u1,
@@ -167,12 +181,15 @@ double TriangleLight::solid_angle(const Vec3& x) const {
 std::optional<LightSample> TriangleLight::sample_area(const Vec3& x, double u1,
                                                       double u2) const {
     const Point2 b = sample_uniform_triangle(u1, u2);
-    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y,
-                              normalize(cross(p1 - p0, p2 - p0)), area());
+    const NormalAndArea f = normal_and_area(cross(p1 - p0, p2 - p0), 0.5);
+    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y, f.normal, f.area);
 }
 
 double TriangleLight::pdf_area(const Vec3& x, const Vec3& w) const {
-    return area_pdf(intersect(x, w), w, normalize(cross(p1 - p0, p2 - p0)), area());
+    const auto hit = intersect(x, w);
+    if (!hit) return 0.0;
+    const NormalAndArea f = normal_and_area(cross(p1 - p0, p2 - p0), 0.5);
+    return area_pdf(hit, w, f.normal, f.area);
 }
 
 std::optional<LightSample> TriangleLight::sample_solid_angle(const Vec3& x, double u1,

@@ -259,9 +259,14 @@ std::optional<SphericalTriangle> SphericalTriangle::make(const Vec3& x, const Ve
     s.cos_p0_p1_ = dot(s.to_p0_, b) / (s.dist_p0_ * s.dist_p1_);
     s.dir_p1_dot_tangent_ = dot(s.dir_p1_, s.tangent_);
     s.triple_p0_p1_tangent_ = std::abs(dot(s.to_p0_, cross(s.edge01_, s.tangent_))) / (s.dist_p0_ * s.dist_p1_);
-    s.angle_p0_p2_ = std::atan2(length(cross(s.to_p0_, s.edge02_)), dot(s.to_p0_, s.to_p0_ + s.edge02_));
     if (!(s.triple_p0_p1_tangent_ > 0)) return std::nullopt;
     return s;
+}
+
+double SphericalTriangle::angle_p0_p2() const {
+    if (angle_p0_p2_ < 0)
+        angle_p0_p2_ = std::atan2(length(cross(to_p0_, edge02_)), dot(to_p0_, to_p0_ + edge02_));
+    return angle_p0_p2_;
 }
 
 double SphericalTriangle::sub_solid_angle(double phi) const {
@@ -275,7 +280,7 @@ DirSample SphericalTriangle::sample(double u1, double u2) const {
     const double tau = 0.5 * u1 * omega_;
     const double st = std::sin(tau), ct = std::cos(tau);
     double phi = 2.0 * std::atan2((1.0 + cos_p0_p1_) * st, triple_p0_p1_tangent_ * ct - dir_p1_dot_tangent_ * st);
-    phi = std::clamp(phi, 0.0, angle_p0_p2_);
+    phi = std::clamp(phi, 0.0, angle_p0_p2());
     const double sp = std::sin(phi), cp = std::cos(phi);
     const Vec3 p = dir_p0_ * cp + tangent_ * sp;
     // The arc b̂ → p̂ is the image of the planar segment p1 → C', C' = p0 + τ (p2 − p0):
@@ -328,6 +333,16 @@ double SphericalTriangle::pdf(const Vec3& w) const {
 Point2 SphericalTriangle::invert(const Vec3& w) const {
     double b1 = 0, b2 = 0, t = 0;
     hit(w, b1, b2, t);
+    return invert_hit(w, b1, b2);
+}
+
+std::optional<Point2> SphericalTriangle::invert_if_hit(const Vec3& w) const {
+    double b1 = 0, b2 = 0, t = 0;
+    if (!hit(w, b1, b2, t)) return std::nullopt;
+    return invert_hit(w, b1, b2);
+}
+
+Point2 SphericalTriangle::invert_hit(const Vec3& w, double b1, double b2) const {
     const double s = 1.0 - b1;  // the hit is (1−s)·p1 + s·C', C' = p0 + τ (p2 − p0)
     if (!(s > 0)) return {0.0, 0.0};
     const double tau = std::clamp(b2 / s, 0.0, 1.0);

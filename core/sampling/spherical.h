@@ -90,9 +90,17 @@ public:
     // Solid angle: 1/Ω if w hits the triangle, else 0.
     double pdf(const Vec3& w) const;
     Point2 invert(const Vec3& w) const;
+    // invert(w) where w hits the triangle (pdf(w) > 0), else empty: the two
+    // from one hit test (a density's, ~10 % of a light's density at x).
+    std::optional<Point2> invert_if_hit(const Vec3& w) const;
 
 private:
     double sub_solid_angle(double phi) const;
+    // invert(w) from w's hit (barycentrics b1, b2).
+    Point2 invert_hit(const Vec3& w, double b1, double b2) const;
+    // The arc from p̂0 to p̂2, which only sample() needs: formed at its first
+    // call (an atan2), not by make() for a shape asked only its density.
+    double angle_p0_p2() const;
     // Barycentrics (of p1, p2) and distance of the hit of w, if any.
     bool hit(const Vec3& w, double& b1, double& b2, double& t) const;
     // Vectors from x (to_p0_ = p0 − x) and the edges from p0, kept apart so far
@@ -105,7 +113,7 @@ private:
     double cos_p0_p1_ = 0;                       // p̂0·p̂1
     double dir_p1_dot_tangent_ = 0;              // p̂1·t̂
     double triple_p0_p1_tangent_ = 0;            // |p̂0·(p̂1 × t̂)|
-    double angle_p0_p2_ = 0;                     // the arc from p̂0 to p̂2
+    mutable double angle_p0_p2_ = -1;            // angle_p0_p2(), once formed (≥ 0)
     double omega_ = 0;                           // solid angle
 };
 
