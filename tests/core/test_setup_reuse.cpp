@@ -35,6 +35,22 @@ bool same_bits(const double* a, const double* b) {
     return std::memcmp(a, b, 3 * sizeof(double)) == 0;
 }
 
+// Optimal-direct with one light technique (`light_samples` a round) and, with
+// `with_bsdf`, bsdf once a round.
+DirectLightingSettings light_and_bsdf(const char* light_technique, int light_samples,
+                                      bool with_bsdf, std::uint64_t seed) {
+    DirectLightingSettings s;
+    s.techniques.push_back(*parse_technique(light_technique));
+    s.samples = {light_samples};
+    if (with_bsdf) {
+        s.techniques.push_back(*parse_technique("bsdf"));
+        s.samples.push_back(1);
+    }
+    s.strategy = Strategy::OptimalDirect;
+    s.seed = seed;
+    return s;
+}
+
 }  // namespace
 
 TEST_CASE("set-up reuse: a point shades the same after other points as on its own",
@@ -161,15 +177,7 @@ TEST_CASE("region radii kept between passes: a later pass shades as one that pla
     const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
     for (const char* light_technique : {"tree/solid-angle", "tree/area"})
         for (bool with_bsdf : {false, true}) {
-            DirectLightingSettings s;
-            s.techniques.push_back(*parse_technique(light_technique));
-            s.samples = {1};
-            if (with_bsdf) {
-                s.techniques.push_back(*parse_technique("bsdf"));
-                s.samples.push_back(1);
-            }
-            s.strategy = Strategy::OptimalDirect;
-            s.seed = 13;
+            const DirectLightingSettings s = light_and_bsdf(light_technique, 1, with_bsdf, 13);
             LightingContext keeping(scene, s), placing(scene, s);
             keeping.keep_region_radii(texels.size());
             REQUIRE(keeping.region_radii.size() == texels.size());
@@ -212,15 +220,8 @@ TEST_CASE("region branching kept between passes: a later pass shades as one that
     for (const char* light_technique : {"tree/solid-angle", "tree/area"})
         for (bool with_bsdf : {false, true})
             for (std::size_t max_nodes : {2, 16}) {
-                DirectLightingSettings s;
-                s.techniques.push_back(*parse_technique(light_technique));
-                s.samples = {2};
-                if (with_bsdf) {
-                    s.techniques.push_back(*parse_technique("bsdf"));
-                    s.samples.push_back(1);
-                }
-                s.strategy = Strategy::OptimalDirect;
-                s.seed = 7;
+                const DirectLightingSettings s =
+                    light_and_bsdf(light_technique, 2, with_bsdf, 7);
                 LightingContext keeping(scene, s), walking(scene, s);
                 keeping.keep_region_radii(texels.size());
                 keeping.keep_region_branching(texels.size(), max_nodes);
