@@ -190,6 +190,7 @@ double shade_in_passes(const Scene& scene, int size, const std::vector<int>& sch
         context.keep_draw_counts(count);
         context.keep_table_reach(count);
         context.keep_region_radii(count);
+        context.keep_region_branching(count);
     }
     tbb::enumerable_thread_specific<PointLighting> shaders([&] { return PointLighting(context); });
     const double texel = 2.0 / size;  // the 2 m receiver; footprints half a texel wide

@@ -505,12 +505,16 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     // (LightingContext::draw_counts), which a later pass continues from,
     // whether their centre is in the shadow of most of their light
     // (shadow_verdicts), the reach behind their uniform or power tables
-    // (table_reach), and the radius of their footprint's region (region_radii).
+    // (table_reach), the radius of their footprint's region (region_radii) and
+    // the light tree's branching there (region_branching).
     if (progressive_ || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
         context_.keep_shadow_verdicts(layout_.count);
         context_.keep_table_reach(layout_.count);
-        if (layout_.lightmap()) context_.keep_region_radii(layout_.count);
+        if (layout_.lightmap()) {
+            context_.keep_region_radii(layout_.count);
+            context_.keep_region_branching(layout_.count);
+        }
     }
     if (allocate_) {
         probe_ = false;  // the first pass is the allocation's pilot, not replaced

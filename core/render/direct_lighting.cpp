@@ -1309,6 +1309,7 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
 void PointLighting::Impl::set_region(std::uint64_t point, Probes& probes) {
     const SurfacePoint& centre = probes[0];
     region_ = {centre.x, centre.n, 0.0};
+    region_memo_.keep_in(p_.region_branching_of(point), p_.region_nodes);
     if (probes.count() == 1) return;
     double* kept = point < p_.region_radii.size() ? &p_.region_radii[point] : nullptr;
     if (kept && *kept >= 0) {
@@ -2309,6 +2310,18 @@ void LightingContext::keep_region_radii(std::size_t points) {
         return !settings.techniques[k].bsdf && selector(settings.techniques[k].selection);
     });
     if (selectors) region_radii.assign(points, -1.0);
+}
+
+void LightingContext::keep_region_branching(std::size_t points, std::size_t max_nodes) {
+    // Only the tree's memo walks nodes (set_region's memo, for its draws).
+    const bool tree = std::any_of(techniques.begin(), techniques.end(), [&](int k) {
+        return !settings.techniques[k].bsdf &&
+               settings.techniques[k].selection == LightSelection::Tree;
+    });
+    if (!tree || points == 0) return;
+    region_nodes =
+        std::min(max_nodes, kRegionBranchingBytes / sizeof(LightSelector::KeptNode) / points);
+    if (region_nodes > 0) region_branching.assign(points * region_nodes, {});
 }
 
 void LightingContext::keep_table_reach(std::size_t points) {

@@ -159,6 +159,28 @@ public:
     // repeats there). 8 bytes per point.
     mutable std::vector<double> region_radii;
     void keep_region_radii(std::size_t points);
+    // Per point with a footprint, where a technique draws from the tree: the
+    // branching its region's memo computed (LightSelector::Memo::keep_in),
+    // region_nodes wide nodes each, the first walked. A job of several passes
+    // keeps it (keep_region_branching) instead of evaluating the same nodes'
+    // bounds again at every pass (a third of what a later pass repeated on
+    // the race's emissive_mesh). 20 bytes a node, up to max_nodes a point
+    // (16: the nodes a texel's first rounds walk; more saved little), fewer
+    // past kRegionBranchingBytes in all, none past it with one. The bound is
+    // small because a bake's new pages cost their first touch: Blender's
+    // allocator (jemalloc) hands a block below 8 MiB to the next bake as it
+    // is, a larger one anew (bench/results/emitters.txt).
+    static constexpr std::size_t kRegionBranchingBytes = std::size_t(6) << 20;
+    static constexpr std::size_t kMaxRegionNodes = 16;
+    mutable std::vector<LightSelector::KeptNode> region_branching;
+    std::size_t region_nodes = 0;
+    void keep_region_branching(std::size_t points, std::size_t max_nodes = kMaxRegionNodes);
+    // The point's kept nodes, null where none are kept.
+    LightSelector::KeptNode* region_branching_of(std::uint64_t point) const {
+        return region_nodes > 0 && point < region_branching.size() / region_nodes
+                   ? &region_branching[point * region_nodes]
+                   : nullptr;
+    }
 
     // Polled every few hundred samples inside PointLighting::shade, so a
     // point with huge counts can still be stopped: returning false makes

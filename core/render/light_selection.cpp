@@ -513,34 +513,47 @@ std::uint32_t LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, 
     return clusters;
 }
 
-std::uint32_t LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
-                                                 double p[kWidth]) const {
-    const WideNode& node = wide_[index];
+std::uint32_t LightSelector::child_importance(std::uint32_t index, const Receiver& at,
+                                              float importance[kWidth]) const {
     const WideLinks& links = links_[index];
-    const int count = links.count;
-    float importance[kWidth];
-    std::uint32_t clusters = node.importance(at.x, at.n, at.radius, importance);
-    clusters = clusters_ ? clusters & ~std::uint32_t(links.is_leaf) & ((1u << count) - 1) : 0;
+    const std::uint32_t clusters = wide_[index].importance(at.x, at.n, at.radius, importance);
+    return clusters_ ? clusters & ~std::uint32_t(links.is_leaf) & ((1u << links.count) - 1) : 0;
+}
+
+// Inline in its two callers, as child_probabilities was one function
+// before remember() shared its second half (~5 % of its instructions).
+__attribute__((always_inline)) inline void LightSelector::probabilities_from(
+    std::uint32_t index, const float importance[kWidth], double p[kWidth]) const {
+    const int count = links_[index].count;
     double total = 0;
+#pragma GCC unroll 4
     for (int i = 0; i < count; ++i) total += p[i] = double(importance[i]);
     if (!(total > 0)) {
         // The parent's looser bounds reached (x, n) but no child's do: no
         // light below can add anything; split by power (all are positive).
         total = 0;
-        for (int i = 0; i < count; ++i) total += p[i] = double(node.power[i]);
+        for (int i = 0; i < count; ++i) total += p[i] = double(wide_[index].power[i]);
     }
     for (int i = 0; i < count; ++i) p[i] /= total;
+}
+
+std::uint32_t LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
+                                                 double p[kWidth]) const {
+    float importance[kWidth];
+    const std::uint32_t clusters = child_importance(index, at, importance);
+    probabilities_from(index, importance, p);
     return clusters;
 }
 
 void LightSelector::focus(Memo& memo, const Receiver& at) const {
+    static_assert(Memo::kSlots == 1u << 11, "slot_of's shift");
     const Vec3 &x = at.x, &n = at.n;
     if (memo.owner != this || memo.slots.empty()) {
         memo.owner = this;
         memo.slots.assign(Memo::kSlots, Memo::Entry{});
         memo.stamp = 0;
     }
-    const bool same = memo.stamp > 0 && memo.x.x == x.x && memo.x.y == x.y &&
+    const bool same = !memo.refocus && memo.stamp > 0 && memo.x.x == x.x && memo.x.y == x.y &&
                       memo.x.z == x.z && memo.n.x == n.x && memo.n.y == n.y &&
                       memo.n.z == n.z && memo.radius == at.radius;
     if (same) return;
@@ -548,31 +561,82 @@ void LightSelector::focus(Memo& memo, const Receiver& at) const {
         std::fill(memo.slots.begin(), memo.slots.end(), Memo::Entry{});
         memo.stamp = 1;
     }
+    memo.refocus = false;
     memo.x = x;
     memo.n = n;
     memo.radius = at.radius;
     memo.drawn = ~0u;
-    memo.root_reaches = !wide_.empty() && root_.importance(x, n, at.radius) > 0;
+    // The kept nodes go where the memo looks for them; their probabilities
+    // are made at their first use (remember), as a pass may not walk them all.
+    constexpr std::uint32_t node_mask = (1u << KeptNode::kClusterShift) - 1;
+    memo.kept_count = 0;
+    for (; memo.kept_count < memo.kept_capacity; ++memo.kept_count) {
+        const std::uint32_t node = memo.kept[memo.kept_count].node_and_clusters;
+        if (node == KeptNode::kNone) break;
+        Memo::Entry& e = memo.slots[slot_of(node & node_mask)];
+        e.node = node & node_mask;
+        e.kept_stamp = memo.stamp;
+        e.kept_index = std::uint8_t(memo.kept_count);
+    }
+    // A node kept at this receiver was walked to: the root reached it.
+    memo.root_reaches =
+        memo.kept_count > 0 || (!wide_.empty() && root_.importance(x, n, at.radius) > 0);
 }
 
-const double* LightSelector::child_probabilities(std::uint32_t index, const Receiver& at,
-                                                 Memo* memo, double scratch[kWidth],
-                                                 std::uint32_t& clusters) const {
+// Inline in sample() and pmf(): every step of a walk comes here, and most
+// find their entry.
+__attribute__((always_inline)) inline const double* LightSelector::child_probabilities(
+    std::uint32_t index, const Receiver& at, Memo* memo, double scratch[kWidth],
+    std::uint32_t& clusters) const {
     if (!memo) {
         clusters = child_probabilities(index, at, scratch);
         return scratch;
     }
     // The memo is focused on (x, n): sample and pmf call root_reaches first.
-    // Fibonacci hashing spreads the depth-first indices of one path.
-    static_assert(Memo::kSlots == 1u << 11, "the hash's shift");
-    Memo::Entry& e = memo->slots[(index * 2654435769u) >> (32 - 11)];
+    Memo::Entry& e = memo->slots[slot_of(index)];
     if (e.stamp != memo->stamp || e.node != index) {
-        e.node = index;
-        e.stamp = memo->stamp;
-        e.clusters = child_probabilities(index, at, e.p);
+        if (memo->kept_capacity > 0) {
+            remember(index, at, *memo, e);
+        } else {
+            e.node = index;
+            e.stamp = memo->stamp;
+            e.clusters = std::uint8_t(child_probabilities(index, at, e.p));
+        }
     }
     clusters = e.clusters;
     return e.p;
+}
+
+// Out of line: the walk's usual step finds its entry in the memo.
+__attribute__((noinline)) void LightSelector::remember(std::uint32_t index, const Receiver& at,
+                                                       Memo& memo, Memo::Entry& e) const {
+    static_assert(sizeof(KeptNode::importance) == sizeof(float) * kWidth, "a node's children");
+    constexpr std::uint32_t node_mask = (1u << KeptNode::kClusterShift) - 1;
+    const KeptNode* found = nullptr;
+    if (e.kept_stamp == memo.stamp && e.node == index) {
+        found = &memo.kept[e.kept_index];  // placed there by focus
+    } else if (e.kept_stamp == memo.stamp || e.stamp == memo.stamp) {
+        // Another node of this focus took the slot: a kept node may have
+        // lost it. (Otherwise focus would have placed a kept `index` here.)
+        for (std::size_t j = 0; j < memo.kept_count && !found; ++j)
+            if ((memo.kept[j].node_and_clusters & node_mask) == index) found = &memo.kept[j];
+    }
+    float importance[kWidth];
+    if (found) {
+        std::memcpy(importance, found->importance, sizeof importance);
+        e.clusters = std::uint8_t(found->node_and_clusters >> KeptNode::kClusterShift);
+    } else {
+        e.clusters = std::uint8_t(child_importance(index, at, importance));
+        if (memo.kept_count < memo.kept_capacity && index <= node_mask) {
+            KeptNode& k = memo.kept[memo.kept_count++];
+            k.node_and_clusters = index | std::uint32_t(e.clusters) << KeptNode::kClusterShift;
+            std::memcpy(k.importance, importance, sizeof importance);
+        }
+    }
+    probabilities_from(index, importance, e.p);
+    e.node = index;
+    e.stamp = memo.stamp;
+    e.kept_stamp = 0;  // p is made
 }
 
 bool LightSelector::root_reaches(const Receiver& at, Memo* memo) const {

@@ -73,6 +73,16 @@ public:
         Vec3 x, n;
         double radius = 0;
     };
+    // One wide node's branching at a receiver, kept beyond a memo's focus
+    // (Memo::keep_in): the children's importances as the node's bounds gave
+    // them — its probabilities follow from them exactly — and which children
+    // are clusters. 20 bytes.
+    struct KeptNode {
+        static constexpr std::uint32_t kNone = ~0u;
+        static constexpr int kClusterShift = 28;  // nodes past 2^28 are not kept
+        std::uint32_t node_and_clusters = kNone;  // node | clusters << kClusterShift
+        float importance[4] = {};
+    };
     // Scratch memory of one thread that remembers the tree's branching
     // probabilities at one (x, n): the draw and the pmfs evaluated at the
     // same point then share the work near the root. A small direct-mapped
@@ -80,12 +90,31 @@ public:
     // cost a cache miss per level): a node that collides is recomputed.
     class Memo {
         friend class LightSelector;
+
+    public:
+        // Where the branching computed at the receiver the memo is next
+        // focused on is kept, and found again by a later focus on the same
+        // receiver (a texel's next pass): up to `capacity` nodes (at most
+        // 255), the first walked — the root and those below it first — in
+        // slots that start out empty (KeptNode::kNone). A node found there is
+        // not evaluated again: the draws and pmfs are those the bounds give.
+        // The caller names the same receiver's store every time, or null.
+        void keep_in(KeptNode* nodes, std::size_t capacity) {
+            // Another store: focus anew, even on an equal receiver, so that
+            // kept_count counts this store's nodes.
+            refocus = refocus || nodes != kept;
+            kept = nodes;
+            kept_capacity = nodes ? std::min<std::size_t>(capacity, 255) : 0;
+        }
+
+    private:
         static constexpr std::size_t kSlots = 2048;  // a power of 2
         const LightSelector* owner = nullptr;  // one memo per selector
         Vec3 x, n;
         double radius = 0;
         std::uint32_t stamp = 0;
         bool root_reaches = false;  // at (x, n)
+        bool refocus = false;
         // The last light drawn from the tree at (x, n), whose pmf the
         // technique pdfs ask for next.
         std::uint32_t drawn = ~0u;
@@ -93,9 +122,15 @@ public:
         struct Entry {
             std::uint32_t node = 0, stamp = 0;  // valid when stamp is the memo's
             double p[4] = {};                   // child probabilities
-            std::uint32_t clusters = 0;         // bit i: child i is a cluster
+            // Where focus found `node` among the kept nodes (kept[kept_index]),
+            // when kept_stamp is the memo's: p is then made at its first use.
+            std::uint32_t kept_stamp = 0;
+            std::uint8_t kept_index = 0;
+            std::uint8_t clusters = 0;  // bit i: child i is a cluster
         };
         std::vector<Entry> slots;
+        KeptNode* kept = nullptr;
+        std::size_t kept_capacity = 0, kept_count = 0;  // kept[0, kept_count) hold nodes
     };
     // A light drawn with u ∈ [0, 1); empty when no light can reach (x, n)
     // (tree only: every bound says so).
@@ -210,6 +245,15 @@ private:
     // importance differs little from their power.
     std::uint32_t child_probabilities(std::uint32_t node, const Receiver& at,
                                       double p[kWidth]) const;
+    // Its two halves: the children's importance at `at` (returns the
+    // clusters), and the probabilities from that importance.
+    std::uint32_t child_importance(std::uint32_t node, const Receiver& at,
+                                   float importance[kWidth]) const;
+    void probabilities_from(std::uint32_t node, const float importance[kWidth],
+                            double p[kWidth]) const;
+    // Fills the memo's entry for `node` at `at`: from the kept nodes where
+    // they hold it, else evaluated (and kept where a slot is free).
+    void remember(std::uint32_t node, const Receiver& at, Memo& memo, Memo::Entry& e) const;
     // The same through a memo focused on `at` (root_reaches does so).
     const double* child_probabilities(std::uint32_t node, const Receiver& at, Memo* memo,
                                       double scratch[kWidth], std::uint32_t& clusters) const;
@@ -235,6 +279,9 @@ private:
     bool root_reaches(const Receiver& at, Memo* memo) const;
     // Sets the memo to `at`, forgetting other receivers.
     void focus(Memo& memo, const Receiver& at) const;
+    // A node's slot in a memo: Fibonacci hashing spreads the depth-first
+    // indices of one path.
+    static std::size_t slot_of(std::uint32_t node) { return (node * 2654435769u) >> (32 - 11); }
 
     Kind kind_ = Kind::Uniform;
     std::vector<std::uint32_t> ids_;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "math/random.h"
@@ -301,4 +302,110 @@ TEST_CASE("light tree pmfs with far clusters and near lights sum to 1 and match 
         }
     }
     CHECK(checked_draws == 4);
+}
+
+namespace {
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+}  // namespace
+
+TEST_CASE("a region's kept branching: later focuses draw and weigh as walks of the tree",
+          "[selection]") {
+    // A bake keeps each texel's branching between passes (Memo::keep_in) and
+    // finds it when the memo next focuses on that texel, other texels
+    // focused between. Its draws and pmfs must be those of a walk without a
+    // memo, bit for bit: with a store that holds every node walked (16, 255)
+    // or fills up (3), with clusters (the far ball) and unbounded lights,
+    // and where kept nodes collide in the memo (every light's pmf with 255
+    // kept: nodes that share one of its 2048 slots).
+    const std::vector<Light> ball = far_ball(3000, Vec3(0, 0, 4), 0.3, 300),
+                             scattered = scattered_lights(3000, true);
+    for (const std::vector<Light>* lights : {&ball, &scattered})
+        for (std::size_t capacity : {3, 16, 255}) {
+            const LightSelector s(LightSelector::Kind::Tree, *lights, all_ids(lights->size()),
+                                  10.0);
+            Pcg32 rng(8, 3);
+            std::vector<LightSelector::Receiver> regions;
+            for (int r = 0; r < 12; ++r)
+                regions.push_back({Vec3(3 * rng.next_double() - 1.5,
+                                        3 * rng.next_double() - 1.5, 0.1 * rng.next_double()),
+                                   Vec3(0, 0, 1), std::pow(10.0, -2.5 + 2 * rng.next_double())});
+            std::vector<std::vector<LightSelector::KeptNode>> stores(
+                regions.size(), std::vector<LightSelector::KeptNode>(capacity));
+            LightSelector::Memo memo;
+            int draws = 0;
+            for (int pass = 0; pass < 3; ++pass)
+                for (std::size_t r = 0; r < regions.size(); ++r) {
+                    const LightSelector::Receiver& at = regions[r];
+                    memo.keep_in(stores[r].data(), capacity);
+                    INFO((lights == &ball ? "ball" : "scattered")
+                         << ", " << capacity << " kept, pass " << pass << ", region " << r);
+                    for (int d = 0; d < 16; ++d) {
+                        const double u = rng.next_double();
+                        const auto kept = s.sample(at, u, &memo), walked = s.sample(at, u);
+                        REQUIRE(kept.has_value() == walked.has_value());
+                        if (!kept) continue;
+                        ++draws;
+                        CHECK(kept->light == walked->light);
+                        CHECK(same_bits(kept->pmf, walked->pmf));
+                        CHECK(same_bits(kept->rest, walked->rest));
+                        // Another light's pmf, as a BSDF sample asks for it.
+                        const std::uint32_t other = rng.next_u32() % lights->size();
+                        CHECK(same_bits(s.pmf(at, other, &memo), s.pmf(at, other)));
+                    }
+                    if (pass == 2 && capacity == 255)
+                        for (std::uint32_t l = 0; l < lights->size(); ++l)
+                            CHECK(same_bits(s.pmf(at, l, &memo), s.pmf(at, l)));
+                }
+            CHECK(draws > 300);
+            // The stores hold the root first, then nodes below it, filled
+            // from the front.
+            for (const auto& store : stores) {
+                std::size_t filled = 0;
+                while (filled < capacity &&
+                       store[filled].node_and_clusters != LightSelector::KeptNode::kNone)
+                    ++filled;
+                CHECK(filled > 0);
+                CHECK((store[0].node_and_clusters &
+                       ((1u << LightSelector::KeptNode::kClusterShift) - 1)) == 0);
+                for (std::size_t j = filled; j < capacity; ++j)
+                    CHECK(store[j].node_and_clusters == LightSelector::KeptNode::kNone);
+                if (capacity == 3) CHECK(filled == 3);
+            }
+        }
+}
+
+TEST_CASE("a region's kept branching is what its draws use", "[selection]") {
+    // The store is read, not only written: a root whose kept importance
+    // gives every share to its first child draws nothing from the others,
+    // and another store for the same receiver is filled anew (keep_in
+    // refocuses the memo on an equal receiver).
+    const std::vector<Light> lights = scattered_lights(3000, false);
+    const LightSelector s(LightSelector::Kind::Tree, lights, all_ids(lights.size()), 10.0);
+    const LightSelector::Receiver at{Vec3(0.3, -0.2, 0.05), Vec3(0, 0, 1), 0.01};
+    std::vector<LightSelector::KeptNode> store(8), other(8);
+    LightSelector::Memo memo;
+    memo.keep_in(store.data(), store.size());
+    std::vector<double> pmf(lights.size());
+    for (std::uint32_t l = 0; l < lights.size(); ++l) pmf[l] = s.pmf(at, l, &memo);
+    REQUIRE(store[0].node_and_clusters == 0);  // the root, no child a cluster
+    int shares = 0;
+    for (float importance : store[0].importance) shares += importance > 0;
+    REQUIRE(shares >= 2);  // so that the first child alone is a change
+    memo.keep_in(other.data(), other.size());
+    CHECK(same_bits(s.pmf(at, 0, &memo), pmf[0]));
+    CHECK(other[0].node_and_clusters == 0);  // the same receiver, kept anew
+    // Only the first child's lights: all of its importance, none elsewhere.
+    store[0].importance[1] = store[0].importance[2] = store[0].importance[3] = 0;
+    memo.keep_in(store.data(), store.size());
+    int dropped = 0;
+    double total = 0;
+    for (std::uint32_t l = 0; l < lights.size(); ++l) {
+        const double p = s.pmf(at, l, &memo);
+        dropped += pmf[l] > 0 && p == 0;
+        total += p;
+    }
+    CHECK(dropped > 0);
+    CHECK(total == Approx(1.0).epsilon(1e-12));
 }

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "render/direct_lighting.h"
+#include "support/emissive_sphere.h"
 #include "support/square_footprint.h"
 
 using namespace omis;
@@ -32,6 +33,22 @@ void add_scene(Scene& scene) {
 
 bool same_bits(const double* a, const double* b) {
     return std::memcmp(a, b, 3 * sizeof(double)) == 0;
+}
+
+// Optimal-direct with one light technique (`light_samples` a round) and, with
+// `with_bsdf`, bsdf once a round.
+DirectLightingSettings light_and_bsdf(const char* light_technique, int light_samples,
+                                      bool with_bsdf, std::uint64_t seed) {
+    DirectLightingSettings s;
+    s.techniques.push_back(*parse_technique(light_technique));
+    s.samples = {light_samples};
+    if (with_bsdf) {
+        s.techniques.push_back(*parse_technique("bsdf"));
+        s.samples.push_back(1);
+    }
+    s.strategy = Strategy::OptimalDirect;
+    s.seed = seed;
+    return s;
 }
 
 }  // namespace
@@ -160,15 +177,7 @@ TEST_CASE("region radii kept between passes: a later pass shades as one that pla
     const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
     for (const char* light_technique : {"tree/solid-angle", "tree/area"})
         for (bool with_bsdf : {false, true}) {
-            DirectLightingSettings s;
-            s.techniques.push_back(*parse_technique(light_technique));
-            s.samples = {1};
-            if (with_bsdf) {
-                s.techniques.push_back(*parse_technique("bsdf"));
-                s.samples.push_back(1);
-            }
-            s.strategy = Strategy::OptimalDirect;
-            s.seed = 13;
+            const DirectLightingSettings s = light_and_bsdf(light_technique, 1, with_bsdf, 13);
             LightingContext keeping(scene, s), placing(scene, s);
             keeping.keep_region_radii(texels.size());
             REQUIRE(keeping.region_radii.size() == texels.size());
@@ -186,4 +195,57 @@ TEST_CASE("region radii kept between passes: a later pass shades as one that pla
                     CHECK(same_bits(a_var, b_var));
                 }
         }
+}
+
+TEST_CASE("region branching kept between passes: a later pass shades as one that walks the "
+          "tree again", "[texel_tables]") {
+    // A bake keeps the light tree's branching at each texel's region
+    // (LightingContext::keep_region_branching) and starts a later pass's
+    // walks from it. The later passes must give the bits of passes that
+    // evaluate every node again: with room for the nodes walked (16 a texel)
+    // and with a store that fills up (2), for the tree drawn by solid angle
+    // and by area, with and without `bsdf`. The race's emissive_mesh kind:
+    // an emissive sphere of 2208 triangles over the floor, and a rect.
+    Scene scene;
+    scene.add_mesh({{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}}, {{0, 1, 2}, {0, 2, 3}});
+    testing::add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 24, 48, Vec3(3, 3, 3));
+    scene.add_light(make_rect_light(Vec3(0.2, 0.05, 1.4), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
+                                    Vec3(40, 40, 40), false, kPi));
+    scene.commit();
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, 0, 0), 0.01}, {Vec3(0.5, 0.4, 0), 0.03}, {Vec3(1.3, 1.3, 0), 0.08},
+        {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(0.2, 0.1, 0), 0.005}};
+    const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
+    constexpr std::uint32_t node_mask = (1u << LightSelector::KeptNode::kClusterShift) - 1;
+    for (const char* light_technique : {"tree/solid-angle", "tree/area"})
+        for (bool with_bsdf : {false, true})
+            for (std::size_t max_nodes : {2, 16}) {
+                const DirectLightingSettings s =
+                    light_and_bsdf(light_technique, 2, with_bsdf, 7);
+                LightingContext keeping(scene, s), walking(scene, s);
+                keeping.keep_region_radii(texels.size());
+                keeping.keep_region_branching(texels.size(), max_nodes);
+                walking.keep_region_radii(texels.size());
+                REQUIRE(keeping.region_nodes == max_nodes);
+                PointLighting kept(keeping), walked(walking);
+                for (const auto& call : calls)
+                    for (std::size_t t = 0; t < texels.size(); ++t) {
+                        const SquareFootprint& f = texels[t];
+                        double a[3], a_var[3], b[3], b_var[3];
+                        kept.shade(t, call[0], call[1], f.centre(), &f, a, a_var);
+                        walked.shade(t, call[0], call[1], f.centre(), &f, b, b_var);
+                        INFO(light_technique << (with_bsdf ? " + bsdf" : "") << ", "
+                                             << max_nodes << " nodes, rounds from " << call[0]
+                                             << ", texel " << t);
+                        CHECK(same_bits(a, b));
+                        CHECK(same_bits(a_var, b_var));
+                        // Every texel here sees the sphere: its walks began
+                        // at the root, which its store holds first.
+                        const LightSelector::KeptNode* store = keeping.region_branching_of(t);
+                        REQUIRE(store);
+                        CHECK((store[0].node_and_clusters & node_mask) == 0);
+                        if (max_nodes == 2)
+                            CHECK(store[1].node_and_clusters != LightSelector::KeptNode::kNone);
+                    }
+            }
 }
