@@ -38,9 +38,10 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
             pass.rounds = rounds_left;
             return pass;
         }
-        // To 4N wherever its 3N rounds fit: reaching 4N by 2N first costs
-        // one more pass (its fixed part) for the same net.
-        if (3.0 * done <= fit && 3 * done <= rounds_left) {
+        // To 4N wherever its 3N rounds fit with kFourfoldMargin to spare:
+        // reaching 4N by 2N first costs one more pass (its fixed part) for
+        // the same net, but measures the cost again half-way.
+        if (3.0 * done <= kFourfoldMargin * fit && 3 * done <= rounds_left) {
             pass.rounds = 3 * done;  // to 4N
             return pass;
         }

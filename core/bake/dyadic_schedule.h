@@ -35,12 +35,17 @@ struct DyadicPass {
 // The next pass after `done` rounds (a power of two, or 0 when a probe pass
 // was dropped; a power of two plus tails after a tail), when the time left
 // fits `fit` more rounds and at most `rounds_left` remain. `min_rounds`: the
-// smallest pass from round 0. Growth: to 4N while 3N rounds fit, else to 2N
-// while N fit; else a tail, as large as fits but no
-// larger than half the block before it (blocks stay aligned nets), and none
-// smaller than N/kSmallestTail (a tiny block adds little and each pass costs a
-// fixed part).
+// smallest pass from round 0. Growth: to 4N while 3N rounds fit in
+// kFourfoldMargin of the time left, else to 2N while N fit; else a tail, as
+// large as fits but no larger than half the block before it (blocks stay
+// aligned nets), and none smaller than N/kSmallestTail (a tiny block adds
+// little and each pass costs a fixed part).
 constexpr int kSmallestTail = 16;
+// A pass ran up to ~1.28× its predicted duration (p90 over 272 passes on the
+// shared machine, bench/results/budgets.txt): a 3N pass predicted to take all
+// the time left would end the budget that much late. (Half, as before, made
+// emissive_mesh's 0.25 s bake 1, +1, +1 rounds where 1, +3 fit.)
+constexpr double kFourfoldMargin = 0.8;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
 // After an optimal strategy's probe of `probe_rounds` (done = 0): the first

@@ -16,13 +16,14 @@ using namespace omis;
 
 TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]") {
     const int lots = 1 << 30;
-    // From N rounds: 4N wherever 3N fit (one pass, one fixed part, where 2N
-    // then 4N would pay two), else 2N.
+    // From N rounds: 4N wherever 3N fit with the margin (one pass, one fixed
+    // part, where 2N then 4N would pay two), else 2N.
     CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(1, 3, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(4, 12, 1, lots).rounds == 12);
-    CHECK(next_dyadic_pass(4, 11.9, 1, lots).rounds == 4);
-    CHECK_FALSE(next_dyadic_pass(4, 11.9, 1, lots).tail);
+    CHECK(next_dyadic_pass(1, 3.03 / kFourfoldMargin, 1, lots).rounds == 3);
+    CHECK(next_dyadic_pass(1, 2.97 / kFourfoldMargin, 1, lots).rounds == 1);
+    CHECK(next_dyadic_pass(4, 12.1 / kFourfoldMargin, 1, lots).rounds == 12);
+    CHECK(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).rounds == 4);
+    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).tail);
     CHECK(next_dyadic_pass(4, 100, 1, 11).rounds == 4);  // 3N beyond the rounds left
     // 2N does not fit: a tail, the largest power of two that fits.
     DyadicPass p = next_dyadic_pass(32, 31, 1, lots);
@@ -57,7 +58,7 @@ TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the
     CHECK(after.pass.rounds == 1);
     CHECK_FALSE(after.pass.tail);
     // ... or to 4 where three rounds fit.
-    after = pass_after_probe(1, 3.5, 8, lots);
+    after = pass_after_probe(1, 3.03 / kFourfoldMargin, 8, lots);
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 3);
     // Not even a round fits: the bake ends on the probe.
