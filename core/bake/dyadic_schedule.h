@@ -41,10 +41,11 @@ struct DyadicPass {
 // aligned nets), and none smaller than N/kSmallestTail (a tiny block adds
 // little and each pass costs a fixed part).
 constexpr int kSmallestTail = 16;
-// A pass ran up to ~1.28× its predicted duration (p90 over 272 passes on the
-// shared machine, bench/results/budgets.txt): a 3N pass predicted to take all
-// the time left would end the budget that much late. (Half, as before, made
-// emissive_mesh's 0.25 s bake 1, +1, +1 rounds where 1, +3 fit.)
+// A pass runs up to ~1.2× its predicted duration (PassTimer, p90 over 114
+// passes on the shared machine, bench/results/budgets.txt): a 3N pass
+// predicted to take all the time left would end the budget that much late.
+// (Half, as before, made emissive_mesh's 0.25 s bake 1, +1, +1 rounds where
+// 1, +3 fit.)
 constexpr double kFourfoldMargin = 0.8;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
