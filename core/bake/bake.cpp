@@ -175,49 +175,6 @@ SampleBudget plan_samples(const LightingContext& context, long long samples, int
     return b;
 }
 
-// Predicts a pass's duration from the passes so far as a + b·samples (a: the
-// fixed cost of a pass — per-point set-up, solves, thread wake-up), through
-// the last two passes of different sizes, else from the last one with the
-// fixed part the first pass measured (set_fixed; 0: in proportion to it).
-class PassTimer {
-public:
-    // A later pass's fixed part as the first pass measured it. A bake's
-    // first passes are one round each, and every pass repeats ~0.8 round of
-    // per-point work (bench "area", 128²): in proportion to the first pass
-    // the second was predicted 1.14–1.82× its duration, with this 0.90–1.66×
-    // (bench/results/budgets.txt).
-    void set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
-    void add(double samples, double seconds) {
-        if (n_ > 0 && samples != s_[1]) {
-            s_[0] = s_[1];
-            t_[0] = t_[1];
-        }
-        s_[1] = samples;
-        t_[1] = seconds;
-        ++n_;
-    }
-    // The most samples per point a pass can take in `seconds`.
-    double fit(double seconds) const {
-        if (n_ == 0 || !(s_[1] > 0)) return 0;
-        // At most kMostFixed of the last pass is fixed: its rounds cost too.
-        double a = std::min(fixed_, kMostFixed * t_[1]), b = (t_[1] - a) / s_[1];
-        if (n_ > 1 && s_[0] != s_[1] && s_[0] > 0) {
-            const double slope = (t_[1] - t_[0]) / (s_[1] - s_[0]);
-            if (slope > 0) {
-                b = slope;
-                a = std::max(0.0, t_[1] - b * s_[1]);
-            }
-        }
-        return b > 0 ? (seconds - a) / b : 0;
-    }
-
-private:
-    static constexpr double kMostFixed = 0.75;
-    double s_[2] = {0, 0}, t_[2] = {0, 0};
-    double fixed_ = 0;
-    int n_ = 0;
-};
-
 void validate(const Scene& scene, const BakeSettings& in) {
     if (!scene.committed())
         throw std::logic_error("scene: not committed (call commit before baking)");

@@ -38,7 +38,10 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
             pass.rounds = rounds_left;
             return pass;
         }
-        if (3.0 * done <= 0.5 * fit && 3 * done <= rounds_left) {
+        // To 4N wherever its 3N rounds fit with kFourfoldMargin to spare:
+        // reaching 4N by 2N first costs one more pass (its fixed part) for
+        // the same net, but measures the cost again half-way.
+        if (3.0 * done <= kFourfoldMargin * fit && 3 * done <= rounds_left) {
             pass.rounds = 3 * done;  // to 4N
             return pass;
         }
@@ -66,6 +69,19 @@ PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds,
     next.keep_probe = true;
     next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds);
     return next;
+}
+
+void PassTimer::set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
+
+void PassTimer::add(double samples, double seconds) {
+    samples_ = samples;
+    seconds_ = seconds;
+}
+
+double PassTimer::fit(double seconds) const {
+    if (!(samples_ > 0)) return 0;
+    const double a = std::min(fixed_, kMostFixed * seconds_), b = (seconds_ - a) / samples_;
+    return b > 0 ? (seconds - a) / b : 0;
 }
 
 double tail_weight(int net_rounds, int tail_rounds, double alpha) {

@@ -35,12 +35,18 @@ struct DyadicPass {
 // The next pass after `done` rounds (a power of two, or 0 when a probe pass
 // was dropped; a power of two plus tails after a tail), when the time left
 // fits `fit` more rounds and at most `rounds_left` remain. `min_rounds`: the
-// smallest pass from round 0. Growth: to 4N while 3N rounds take at most half
-// the time left, else to 2N while N fit; else a tail, as large as fits but no
-// larger than half the block before it (blocks stay aligned nets), and none
-// smaller than N/kSmallestTail (a tiny block adds little and each pass costs a
-// fixed part).
+// smallest pass from round 0. Growth: to 4N while 3N rounds fit in
+// kFourfoldMargin of the time left, else to 2N while N fit; else a tail, as
+// large as fits but no larger than half the block before it (blocks stay
+// aligned nets), and none smaller than N/kSmallestTail (a tiny block adds
+// little and each pass costs a fixed part).
 constexpr int kSmallestTail = 16;
+// A pass runs up to ~1.2× its predicted duration (PassTimer, p90 over 114
+// passes on the shared machine, bench/results/budgets.txt): a 3N pass
+// predicted to take all the time left would end the budget that much late.
+// (Half, as before, made emissive_mesh's 0.25 s bake 1, +1, +1 rounds where
+// 1, +3 fit.)
+constexpr double kFourfoldMargin = 0.8;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
 // After an optimal strategy's probe of `probe_rounds` (done = 0): the first
@@ -59,6 +65,30 @@ int power_of_two_floor(int n);
 // A tail block's weight in the running mean, in rounds: N·(R/N)^α for a tail
 // of R rounds after a net of N rounds.
 double tail_weight(int net_rounds, int tail_rounds, double alpha);
+
+// Predicts a time-budget pass's duration as a + b·samples: a, the fixed cost
+// of a pass (per-point set-up, solves, thread wake-up), as the first pass
+// measured it (set_fixed; 0: in proportion to the last pass); b from the last
+// pass, whose time is nearest the load the next one meets. Not from the slope
+// between the last two passes: on the shared machine passes of 4 and 8 rounds
+// took 0.390 and 0.392 s, the slope made a round nearly free, and a 2 s
+// budget ran a pass of 48 rounds to 3.36 s (bench/results/budgets.txt).
+class PassTimer {
+public:
+    // A later pass's fixed part as the first pass measured it: every pass
+    // repeats ~0.8 round of per-point work (bench "area", 128²); in
+    // proportion to a one-round first pass the second was predicted
+    // 1.14–1.82× its duration, with this 0.90–1.66× (budgets.txt).
+    void set_fixed(double seconds);
+    void add(double samples, double seconds);
+    // The most samples per point a pass can take in `seconds`.
+    double fit(double seconds) const;
+
+private:
+    static constexpr double kMostFixed = 0.75;  // of the last pass: its rounds cost too
+    double samples_ = 0, seconds_ = 0;          // of the last pass
+    double fixed_ = 0;
+};
 
 // The rate α of error ∝ rounds^-α of the running means, from how much they
 // change between consecutive power-of-two ends: with nested means, the mean

@@ -2265,7 +2265,8 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
 LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettings& s)
     : scene((validate(scene_, s), scene_)),
       settings(s),
-      plan(plan_effects(scene_, s.techniques, s.samples, s.points_on_mesh)) {
+      plan(plan_effects(scene_, s.techniques, s.samples, s.points_on_mesh)),
+      power(scene_.light_powers()) {
     for (std::size_t k = 0; k < settings.techniques.size(); ++k)
         if (plan.enabled[k]) techniques.push_back(int(k));
     for (std::uint32_t l = 0; l < scene.lights().size(); ++l) {
@@ -2273,7 +2274,6 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
         // A world left to `bsdf` is no light technique's to select.
         const bool bsdf_only = plan.world_by_bsdf && light.type == LightType::World;
         if (!bsdf_only) (light.is_delta() ? delta : integrated).push_back(l);
-        power.push_back(light.power(scene.bounding_radius()));
         if (scene.lights().size() <= kMaxTinyShapeTable)
             tiny_shapes.push_back(tiny_shape_of(light));
     }

@@ -99,7 +99,7 @@ public:
     const EffectPlan plan;
     std::vector<int> techniques;  // enabled technique indices
     std::vector<std::uint32_t> integrated, delta;
-    std::vector<double> power;  // per light, for `power` selection
+    const std::vector<double>& power;  // per light, for `power` selection (the scene's)
     // Per light, what tells whether a rect or triangle is tiny in solid angle
     // at x (then sampled by area for `solid-angle`; direct_lighting.cpp);
     // empty among many lights, where each light's is made from the light.

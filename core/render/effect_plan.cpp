@@ -45,6 +45,14 @@ double mesh_extent(const Mesh& mesh) {
     return length(hi - lo);
 }
 
+// A light's power: the scene's, made at commit (Scene::light_powers), else
+// made here.
+double light_power(const Scene& scene, std::size_t light) {
+    const std::vector<double>& powers = scene.light_powers();
+    return light < powers.size() ? powers[light]
+                                 : scene.lights()[light].power(scene.bounding_radius());
+}
+
 // Whether a scene's integrated lights are all local (no sun, no world) and of
 // comparable power: the largest at most kComparablePower times the smallest.
 // Uniform selection then costs little where the unoccluded weights are right
@@ -55,10 +63,11 @@ double mesh_extent(const Mesh& mesh) {
 bool comparable_local_lights(const Scene& scene, bool without_world) {
     double lo = 0, hi = 0;
     bool any = false;
-    for (const Light& l : scene.lights()) {
+    for (std::size_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& l = scene.lights()[i];
         if (l.is_delta() || (without_world && l.type == LightType::World)) continue;
         if (l.type == LightType::Sun || l.type == LightType::World) return false;
-        const double p = l.power(scene.bounding_radius());
+        const double p = light_power(scene, i);
         lo = any ? std::min(lo, p) : p;
         hi = any ? std::max(hi, p) : p;
         any = true;
@@ -83,10 +92,11 @@ bool comparable_local_lights(const Scene& scene, bool without_world) {
 bool minor_world(const Scene& scene) {
     int integrated = 0;
     double world = -1, others = 0;
-    for (const Light& l : scene.lights()) {
+    for (std::size_t i = 0; i < scene.lights().size(); ++i) {
+        const Light& l = scene.lights()[i];
         if (l.is_delta()) continue;
         ++integrated;
-        const double p = l.power(scene.bounding_radius());
+        const double p = light_power(scene, i);
         if (l.type == LightType::World && l.visible_to_bsdf)
             world = p;
         else

@@ -94,6 +94,8 @@ void Scene::commit() {
         light.mesh_triangle = t.triangle;
         lights_.push_back(light);
     }
+    light_powers_.reserve(lights_.size());
+    for (const Light& l : lights_) light_powers_.push_back(l.power(bounding_radius_));
     build_emitter_shapes();
     geometry_.commit();  // with the emitter candidates (build_emitter_shapes)
     committed_ = true;

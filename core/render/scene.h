@@ -52,6 +52,10 @@ public:
     const std::vector<std::uint32_t>& unshaped_lights() const { return unshaped_lights_; }
     // Radius of a sphere around the origin holding every mesh and local light.
     double bounding_radius() const { return bounding_radius_; }
+    // Per light, Light::power at bounding_radius(), made once at commit: every
+    // bake's lighting context and effect plan read it (16k emissive
+    // triangles: ~1 ms a bake when each bake made it again). After commit.
+    const std::vector<double>& light_powers() const { return light_powers_; }
     // The light selection of `kind` over the non-delta lights (delta = false)
     // or the delta lights (true), in light-id order, as LightSelector builds
     // it with bounding_radius(). Built on first use and kept, so bakes of one
@@ -68,6 +72,7 @@ private:
     EmitterShapes emitter_shapes_;
     std::vector<std::uint32_t> unshaped_lights_;
     std::vector<Light> lights_;
+    std::vector<double> light_powers_;
     std::vector<Receiver> receivers_;  // per mesh; shorter: Lambert for the rest
     std::size_t analytic_lights_ = 0;
     double bounding_radius_ = 1;

@@ -16,11 +16,15 @@ using namespace omis;
 
 TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]") {
     const int lots = 1 << 30;
-    // From N rounds: 4N when 3N take at most half the time left, else 2N.
+    // From N rounds: 4N wherever 3N fit with the margin (one pass, one fixed
+    // part, where 2N then 4N would pay two), else 2N.
     CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(4, 24, 1, lots).rounds == 12);
-    CHECK(next_dyadic_pass(4, 23.9, 1, lots).rounds == 4);
-    CHECK_FALSE(next_dyadic_pass(4, 23.9, 1, lots).tail);
+    CHECK(next_dyadic_pass(1, 3.03 / kFourfoldMargin, 1, lots).rounds == 3);
+    CHECK(next_dyadic_pass(1, 2.97 / kFourfoldMargin, 1, lots).rounds == 1);
+    CHECK(next_dyadic_pass(4, 12.1 / kFourfoldMargin, 1, lots).rounds == 12);
+    CHECK(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).rounds == 4);
+    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).tail);
+    CHECK(next_dyadic_pass(4, 100, 1, 11).rounds == 4);  // 3N beyond the rounds left
     // 2N does not fit: a tail, the largest power of two that fits.
     DyadicPass p = next_dyadic_pass(32, 31, 1, lots);
     CHECK(p.rounds == 16);
@@ -53,14 +57,37 @@ TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 1);
     CHECK_FALSE(after.pass.tail);
-    // ... or to 4 where three rounds fit in half the time left.
-    after = pass_after_probe(1, 7.9, 8, lots);
+    // ... or to 4 where three rounds fit.
+    after = pass_after_probe(1, 3.03 / kFourfoldMargin, 8, lots);
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 3);
     // Not even a round fits: the bake ends on the probe.
     after = pass_after_probe(1, 0.9, 4, lots);
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 0);
+}
+
+TEST_CASE("a pass's predicted cost: the first pass's fixed part plus the last pass's rate",
+          "[bake][schedule]") {
+    PassTimer timer;
+    CHECK(timer.fit(1.0) == 0);  // nothing measured: nothing predicted
+    timer.set_fixed(0.05);
+    timer.add(4, 0.390);
+    // A round costs (0.390 − 0.05)/4 s; 0.7 s fit (0.7 − 0.05)/0.085 rounds.
+    CHECK(timer.fit(0.7) == Approx(0.65 / 0.085));
+    // Two passes of 4 and 8 rounds with near-equal times (the shared
+    // machine's load fell between them) predict from the last pass, not from
+    // their slope, which put a round at 0.5 ms and let 48 rounds "fit" 0.7 s.
+    timer.add(8, 0.392);
+    CHECK(timer.fit(0.7) == Approx(0.65 / (0.342 / 8)));
+    CHECK(timer.fit(0.7) < 16);
+    // A fixed part beyond kMostFixed (3/4) of the last pass is capped there.
+    timer.set_fixed(1.0);
+    CHECK(timer.fit(0.7) == Approx((0.7 - 0.294) / (0.098 / 8)));
+    // No fixed part measured: in proportion to the last pass.
+    PassTimer proportional;
+    proportional.add(2, 0.1);
+    CHECK(proportional.fit(0.5) == Approx(10));
 }
 
 TEST_CASE("a tail's weight: its rounds at α = 1, less where the error falls faster",
