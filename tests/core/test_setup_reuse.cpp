@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstring>
+#include <string>
 #include <vector>
 
 #include "render/direct_lighting.h"
@@ -49,6 +50,29 @@ DirectLightingSettings light_and_bsdf(const char* light_technique, int light_sam
     s.strategy = Strategy::OptimalDirect;
     s.seed = seed;
     return s;
+}
+
+// The passes the region tests run: first round, rounds.
+constexpr int kRegionCalls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};
+
+// Shades every texel over kRegionCalls' passes with `kept` (a context that
+// keeps something between passes) and `redone` (one that makes it again) and
+// checks they give the same bits; `also(t)` adds a test's own checks.
+template <class AlsoCheck>
+void check_passes_alike(PointLighting& kept, PointLighting& redone,
+                        const std::vector<SquareFootprint>& texels, const std::string& what,
+                        AlsoCheck also) {
+    for (const auto& call : kRegionCalls)
+        for (std::size_t t = 0; t < texels.size(); ++t) {
+            const SquareFootprint& f = texels[t];
+            double a[3], a_var[3], b[3], b_var[3];
+            kept.shade(t, call[0], call[1], f.centre(), &f, a, a_var);
+            redone.shade(t, call[0], call[1], f.centre(), &f, b, b_var);
+            INFO(what << ", rounds from " << call[0] << ", texel " << t);
+            CHECK(same_bits(a, b));
+            CHECK(same_bits(a_var, b_var));
+            also(t);
+        }
 }
 
 }  // namespace
@@ -174,7 +198,6 @@ TEST_CASE("region radii kept between passes: a later pass shades as one that pla
     const std::vector<SquareFootprint> texels = {
         {Vec3(0, 0, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05}, {Vec3(1.3, 1.3, 0), 0.08},
         {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(-0.4, -0.3, 0), 0.02}};
-    const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
     for (const char* light_technique : {"tree/solid-angle", "tree/area"})
         for (bool with_bsdf : {false, true}) {
             const DirectLightingSettings s = light_and_bsdf(light_technique, 1, with_bsdf, 13);
@@ -182,18 +205,9 @@ TEST_CASE("region radii kept between passes: a later pass shades as one that pla
             keeping.keep_region_radii(texels.size());
             REQUIRE(keeping.region_radii.size() == texels.size());
             PointLighting kept(keeping), placed(placing);
-            for (const auto& call : calls)
-                for (std::size_t t = 0; t < texels.size(); ++t) {
-                    const SquareFootprint& f = texels[t];
-                    double a[3], a_var[3], b[3], b_var[3];
-                    kept.shade(t, call[0], call[1], f.centre(), &f, a, a_var);
-                    placed.shade(t, call[0], call[1], f.centre(), &f, b, b_var);
-                    INFO(light_technique << (with_bsdf ? " + bsdf" : "") << ", rounds from "
-                                         << call[0] << ", texel " << t);
-                    CHECK(keeping.region_radii[t] > 0);
-                    CHECK(same_bits(a, b));
-                    CHECK(same_bits(a_var, b_var));
-                }
+            check_passes_alike(kept, placed, texels,
+                               std::string(light_technique) + (with_bsdf ? " + bsdf" : ""),
+                               [&](std::size_t t) { CHECK(keeping.region_radii[t] > 0); });
         }
 }
 
@@ -215,7 +229,6 @@ TEST_CASE("region branching kept between passes: a later pass shades as one that
     const std::vector<SquareFootprint> texels = {
         {Vec3(0, 0, 0), 0.01}, {Vec3(0.5, 0.4, 0), 0.03}, {Vec3(1.3, 1.3, 0), 0.08},
         {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(0.2, 0.1, 0), 0.005}};
-    const int calls[][2] = {{0, 1}, {1, 3}, {4, 4}, {8, 2}};  // first round, rounds
     constexpr std::uint32_t node_mask = (1u << LightSelector::KeptNode::kClusterShift) - 1;
     for (const char* light_technique : {"tree/solid-angle", "tree/area"})
         for (bool with_bsdf : {false, true})
@@ -228,24 +241,17 @@ TEST_CASE("region branching kept between passes: a later pass shades as one that
                 walking.keep_region_radii(texels.size());
                 REQUIRE(keeping.region_nodes == max_nodes);
                 PointLighting kept(keeping), walked(walking);
-                for (const auto& call : calls)
-                    for (std::size_t t = 0; t < texels.size(); ++t) {
-                        const SquareFootprint& f = texels[t];
-                        double a[3], a_var[3], b[3], b_var[3];
-                        kept.shade(t, call[0], call[1], f.centre(), &f, a, a_var);
-                        walked.shade(t, call[0], call[1], f.centre(), &f, b, b_var);
-                        INFO(light_technique << (with_bsdf ? " + bsdf" : "") << ", "
-                                             << max_nodes << " nodes, rounds from " << call[0]
-                                             << ", texel " << t);
-                        CHECK(same_bits(a, b));
-                        CHECK(same_bits(a_var, b_var));
-                        // Every texel here sees the sphere: its walks began
-                        // at the root, which its store holds first.
-                        const LightSelector::KeptNode* store = keeping.region_branching_of(t);
-                        REQUIRE(store);
-                        CHECK((store[0].node_and_clusters & node_mask) == 0);
-                        if (max_nodes == 2)
-                            CHECK(store[1].node_and_clusters != LightSelector::KeptNode::kNone);
-                    }
+                const std::string what = std::string(light_technique) +
+                                         (with_bsdf ? " + bsdf" : "") + ", " +
+                                         std::to_string(max_nodes) + " nodes";
+                check_passes_alike(kept, walked, texels, what, [&](std::size_t t) {
+                    // Every texel here sees the sphere: its walks began at
+                    // the root, which its store holds first.
+                    const LightSelector::KeptNode* store = keeping.region_branching_of(t);
+                    REQUIRE(store);
+                    CHECK((store[0].node_and_clusters & node_mask) == 0);
+                    if (max_nodes == 2)
+                        CHECK(store[1].node_and_clusters != LightSelector::KeptNode::kNone);
+                });
             }
 }
