@@ -789,7 +789,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
         }
     } else {
         next = next_dyadic_pass(done_rounds_, fit, later_min_rounds_,
-                                budget_.full_rounds - done_rounds_);
+                                budget_.full_rounds - done_rounds_, rate_.measured());
     }
     if (next.rounds < 1) {
         status_ = BakeStatus::TimeBudget;

@@ -21,7 +21,8 @@ int power_of_two_ceil(int n) {
 
 }  // namespace
 
-DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left) {
+DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left,
+                            bool rate_measured) {
     DyadicPass pass;
     if (rounds_left <= 0 || !(fit >= 1)) return pass;
     const int can = int(std::min<double>(fit, rounds_left));
@@ -38,12 +39,15 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
             pass.rounds = rounds_left;
             return pass;
         }
-        // To 4N wherever its 3N rounds fit with kFourfoldMargin to spare:
-        // reaching 4N by 2N first costs one more pass (its fixed part) for
+        // To 8N or 4N wherever its rounds fit with kGrowthMargin to spare:
+        // reaching it by 2N first costs one more pass (its fixed part) for
         // the same net, but measures the cost again half-way.
-        if (3.0 * done <= kFourfoldMargin * fit && 3 * done <= rounds_left) {
-            pass.rounds = 3 * done;  // to 4N
-            return pass;
+        for (int growth = kMostGrowth; growth >= 4; growth /= 2) {
+            const double rounds = double(growth - 1) * done;
+            if (rounds <= kGrowthMargin * fit && rounds <= rounds_left) {
+                pass.rounds = int(rounds);
+                return pass;
+            }
         }
         if (done <= can) {
             pass.rounds = done;  // to 2N
@@ -54,7 +58,8 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
     // (two equal blocks would be a larger net, whose points weigh alike).
     const int last_block = done & -done;
     const int rounds = std::min(power_of_two_floor(can), last_block / 2);
-    if (rounds >= 1 && kSmallestTail * rounds >= net) {
+    const bool equal_weight = 2 * rounds == done;  // the first tail, N/2 (dyadic_schedule.h)
+    if (rounds >= 1 && kSmallestTail * rounds >= net && (equal_weight || rate_measured)) {
         pass.rounds = rounds;
         pass.tail = true;
     }
@@ -64,10 +69,10 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
 PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds,
                                 int rounds_total) {
     PassAfterProbe next;
-    next.pass = next_dyadic_pass(0, fit, min_rounds, rounds_total);
+    next.pass = next_dyadic_pass(0, fit, min_rounds, rounds_total, false);
     if (next.pass.rounds >= 1) return next;
     next.keep_probe = true;
-    next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds);
+    next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds, false);
     return next;
 }
 

@@ -35,19 +35,28 @@ struct DyadicPass {
 // The next pass after `done` rounds (a power of two, or 0 when a probe pass
 // was dropped; a power of two plus tails after a tail), when the time left
 // fits `fit` more rounds and at most `rounds_left` remain. `min_rounds`: the
-// smallest pass from round 0. Growth: to 4N while 3N rounds fit in
-// kFourfoldMargin of the time left, else to 2N while N fit; else a tail, as
-// large as fits but no larger than half the block before it (blocks stay
-// aligned nets), and none smaller than N/kSmallestTail (a tiny block adds
-// little and each pass costs a fixed part).
+// smallest pass from round 0. Growth: to 8N while 7N rounds fit in
+// kGrowthMargin of the time left, else to 4N while 3N do, else to 2N while N
+// fit; else a tail, as large as fits but no larger than half the block
+// before it (blocks stay aligned nets), and none smaller than
+// N/kSmallestTail (a tiny block adds little and each pass costs a fixed
+// part). A tail below N/2 weighs by the rate α (tail_weight), so it waits
+// until `rate_measured` (NetRate::measured): at the default α = 1 its equal
+// weight raises a smooth scene's error (1.25N worse than N, above).
 constexpr int kSmallestTail = 16;
 // A pass runs up to ~1.2× its predicted duration (PassTimer, p90 over 114
-// passes on the shared machine, bench/results/budgets.txt): a 3N pass
+// passes on the shared machine, bench/results/budgets.txt): a pass
 // predicted to take all the time left would end the budget that much late.
 // (Half, as before, made emissive_mesh's 0.25 s bake 1, +1, +1 rounds where
 // 1, +3 fit.)
-constexpr double kFourfoldMargin = 0.8;
-DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
+constexpr double kGrowthMargin = 0.8;
+// Every pass repeats a fixed part (0.4–0.75 of a round on emissive_mesh,
+// omis_bench_first_pass --passes), so a net is reached in as few passes as
+// fit; growth stops at 8N so that the ends 1, 8, 16 still measure α before
+// a tail.
+constexpr int kMostGrowth = 8;
+DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left,
+                            bool rate_measured);
 
 // After an optimal strategy's probe of `probe_rounds` (done = 0): the first
 // net of at least min_rounds from round 0, replacing the probe; where that no

@@ -14,35 +14,50 @@
 
 using namespace omis;
 
-TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]") {
+TEST_CASE("dyadic passes: to 2N, 4N or 8N, then tails that halve", "[bake][schedule]") {
     const int lots = 1 << 30;
-    // From N rounds: 4N wherever 3N fit with the margin (one pass, one fixed
-    // part, where 2N then 4N would pay two), else 2N.
-    CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(1, 3.03 / kFourfoldMargin, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(1, 2.97 / kFourfoldMargin, 1, lots).rounds == 1);
-    CHECK(next_dyadic_pass(4, 12.1 / kFourfoldMargin, 1, lots).rounds == 12);
-    CHECK(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).rounds == 4);
-    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).tail);
-    CHECK(next_dyadic_pass(4, 100, 1, 11).rounds == 4);  // 3N beyond the rounds left
+    const bool measured = true;  // α known (NetRate::measured)
+    // From N rounds: 8N wherever 7N fit with the margin, else 4N wherever 3N
+    // do (one pass, one fixed part, where 2N then 4N would pay two), else 2N.
+    CHECK(next_dyadic_pass(1, 100, 1, lots, measured).rounds == 7);
+    CHECK(next_dyadic_pass(1, 7.07 / kGrowthMargin, 1, lots, measured).rounds == 7);
+    CHECK(next_dyadic_pass(1, 6.93 / kGrowthMargin, 1, lots, measured).rounds == 3);
+    CHECK(next_dyadic_pass(1, 3.03 / kGrowthMargin, 1, lots, measured).rounds == 3);
+    CHECK(next_dyadic_pass(1, 2.97 / kGrowthMargin, 1, lots, measured).rounds == 1);
+    CHECK(next_dyadic_pass(4, 28.1 / kGrowthMargin, 1, lots, measured).rounds == 28);
+    CHECK(next_dyadic_pass(4, 27.9 / kGrowthMargin, 1, lots, measured).rounds == 12);
+    CHECK(next_dyadic_pass(4, 12.1 / kGrowthMargin, 1, lots, measured).rounds == 12);
+    CHECK(next_dyadic_pass(4, 11.9 / kGrowthMargin, 1, lots, measured).rounds == 4);
+    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kGrowthMargin, 1, lots, measured).tail);
+    CHECK(next_dyadic_pass(4, 100, 1, 27, measured).rounds == 12);  // 7N beyond the rounds left
+    CHECK(next_dyadic_pass(4, 100, 1, 11, measured).rounds == 4);   // 3N too
+    // Growth never passes 8N, however much fits.
+    CHECK(next_dyadic_pass(2, 1e6, 1, lots, measured).rounds == 14);
+    // No overflow near the largest sample budgets.
+    CHECK(next_dyadic_pass(1 << 28, 1e12, 1, lots, measured).rounds == 3 << 28);
     // 2N does not fit: a tail, the largest power of two that fits.
-    DyadicPass p = next_dyadic_pass(32, 31, 1, lots);
+    DyadicPass p = next_dyadic_pass(32, 31, 1, lots, measured);
     CHECK(p.rounds == 16);
     CHECK(p.tail);
-    CHECK(next_dyadic_pass(32, 9, 1, lots).rounds == 8);
+    CHECK(next_dyadic_pass(32, 9, 1, lots, measured).rounds == 8);
     // After a tail, only smaller tails (32 + 8: at most 4).
-    CHECK(next_dyadic_pass(40, 100, 1, lots).rounds == 4);
-    CHECK(next_dyadic_pass(40, 100, 1, lots).tail);
+    CHECK(next_dyadic_pass(40, 100, 1, lots, measured).rounds == 4);
+    CHECK(next_dyadic_pass(40, 100, 1, lots, measured).tail);
     // No tail below N/16, nothing when a round does not fit.
-    CHECK(next_dyadic_pass(64, 3.9, 1, lots).rounds == 0);
-    CHECK(next_dyadic_pass(64, 4, 1, lots).rounds == 4);
-    CHECK(next_dyadic_pass(8, 0.5, 1, lots).rounds == 0);
+    CHECK(next_dyadic_pass(64, 3.9, 1, lots, measured).rounds == 0);
+    CHECK(next_dyadic_pass(64, 4, 1, lots, measured).rounds == 4);
+    CHECK(next_dyadic_pass(8, 0.5, 1, lots, measured).rounds == 0);
+    // Before α is measured, only the N/2 tail (equal weight by construction).
+    CHECK(next_dyadic_pass(32, 31, 1, lots, false).rounds == 16);
+    CHECK(next_dyadic_pass(32, 9, 1, lots, false).rounds == 0);
+    CHECK(next_dyadic_pass(48, 100, 1, lots, false).rounds == 0);
+    CHECK(next_dyadic_pass(48, 100, 1, lots, measured).rounds == 8);
     // After a dropped probe: the first net of at least min_rounds.
-    CHECK(next_dyadic_pass(0, 100, 3, lots).rounds == 4);
-    CHECK(next_dyadic_pass(0, 3, 3, lots).rounds == 0);
+    CHECK(next_dyadic_pass(0, 100, 3, lots, measured).rounds == 4);
+    CHECK(next_dyadic_pass(0, 3, 3, lots, measured).rounds == 0);
     // A sample budget's last rounds are taken as asked.
-    CHECK(next_dyadic_pass(64, 1000, 1, 40).rounds == 40);
-    CHECK_FALSE(next_dyadic_pass(64, 1000, 1, 40).tail);
+    CHECK(next_dyadic_pass(64, 1000, 1, 40, measured).rounds == 40);
+    CHECK_FALSE(next_dyadic_pass(64, 1000, 1, 40, measured).tail);
 }
 
 TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the probe stays",
@@ -58,7 +73,7 @@ TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the
     CHECK(after.pass.rounds == 1);
     CHECK_FALSE(after.pass.tail);
     // ... or to 4 where three rounds fit.
-    after = pass_after_probe(1, 3.03 / kFourfoldMargin, 8, lots);
+    after = pass_after_probe(1, 3.03 / kGrowthMargin, 8, lots);
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 3);
     // Not even a round fits: the bake ends on the probe.
