@@ -789,7 +789,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
         }
     } else {
         next = next_dyadic_pass(done_rounds_, fit, later_min_rounds_,
-                                budget_.full_rounds - done_rounds_, rate_.measured());
+                                budget_.full_rounds - done_rounds_);
     }
     if (next.rounds < 1) {
         status_ = BakeStatus::TimeBudget;
@@ -801,7 +801,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
     pass.tail = next.tail;
     if (next.tail && 2 * next.rounds != done_rounds_)
         pass.weight = budget_.per_round * tail_weight(power_of_two_floor(done_rounds_),
-                                                      next.rounds, rate_.alpha());
+                                                      next.rounds, rate_.tail_alpha());
     return true;
 }
 

@@ -21,8 +21,7 @@ int power_of_two_ceil(int n) {
 
 }  // namespace
 
-DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left,
-                            bool rate_measured) {
+DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left) {
     DyadicPass pass;
     if (rounds_left <= 0 || !(fit >= 1)) return pass;
     const int can = int(std::min<double>(fit, rounds_left));
@@ -58,8 +57,7 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
     // (two equal blocks would be a larger net, whose points weigh alike).
     const int last_block = done & -done;
     const int rounds = std::min(power_of_two_floor(can), last_block / 2);
-    const bool equal_weight = 2 * rounds == done;  // the first tail, N/2 (dyadic_schedule.h)
-    if (rounds >= 1 && kSmallestTail * rounds >= net && (equal_weight || rate_measured)) {
+    if (rounds >= 1 && kSmallestTail * rounds >= net) {
         pass.rounds = rounds;
         pass.tail = true;
     }
@@ -69,10 +67,10 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
 PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds,
                                 int rounds_total) {
     PassAfterProbe next;
-    next.pass = next_dyadic_pass(0, fit, min_rounds, rounds_total, false);
+    next.pass = next_dyadic_pass(0, fit, min_rounds, rounds_total);
     if (next.pass.rounds >= 1) return next;
     next.keep_probe = true;
-    next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds, false);
+    next.pass = next_dyadic_pass(probe_rounds, fit, 1, rounds_total - probe_rounds);
     return next;
 }
 

@@ -40,9 +40,7 @@ struct DyadicPass {
 // fit; else a tail, as large as fits but no larger than half the block
 // before it (blocks stay aligned nets), and none smaller than
 // N/kSmallestTail (a tiny block adds little and each pass costs a fixed
-// part). A tail below N/2 weighs by the rate α (tail_weight), so it waits
-// until `rate_measured` (NetRate::measured): at the default α = 1 its equal
-// weight raises a smooth scene's error (1.25N worse than N, above).
+// part).
 constexpr int kSmallestTail = 16;
 // A pass runs up to ~1.2× its predicted duration (PassTimer, p90 over 114
 // passes on the shared machine, bench/results/budgets.txt): a pass
@@ -53,10 +51,9 @@ constexpr double kGrowthMargin = 0.8;
 // Every pass repeats a fixed part (0.4–0.75 of a round on emissive_mesh,
 // omis_bench_first_pass --passes), so a net is reached in as few passes as
 // fit; growth stops at 8N so that the ends 1, 8, 16 still measure α before
-// a tail.
+// a tail (NetRate::tail_alpha).
 constexpr int kMostGrowth = 8;
-DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left,
-                            bool rate_measured);
+DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
 // After an optimal strategy's probe of `probe_rounds` (done = 0): the first
 // net of at least min_rounds from round 0, replacing the probe; where that no
@@ -113,6 +110,15 @@ public:
     void reset() { *this = NetRate{}; }
     double alpha() const { return alpha_; }
     bool measured() const { return measured_; }
+    // The α a tail weighs by (tail_weight): the measured one, else
+    // kUnmeasuredAlpha. With weights from an assumed a where the error falls
+    // as N^-α, a tail of R = rN raises the net's error only where
+    // r^(a−α) > 2 + r^a: a = 2 never does for α ≤ 2 (and by ≤ 1.2 % at
+    // α = 2.5, r = 1/8), while a = 1 — equal weights — raised principled_r0's
+    // (α ≈ 2.2: 1.25N worse than N, above). Fewer ends are measured where a
+    // pass grows 8×.
+    static constexpr double kUnmeasuredAlpha = 2.0;
+    double tail_alpha() const { return measured_ ? alpha_ : kUnmeasuredAlpha; }
 
 private:
     std::vector<int> ends_;
