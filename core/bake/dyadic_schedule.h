@@ -48,10 +48,10 @@ constexpr int kSmallestTail = 16;
 // (Half, as before, made emissive_mesh's 0.25 s bake 1, +1, +1 rounds where
 // 1, +3 fit.)
 constexpr double kGrowthMargin = 0.8;
-// Every pass repeats a fixed part (0.4–0.75 of a round on emissive_mesh,
-// omis_bench_first_pass --passes), so a net is reached in as few passes as
-// fit; growth stops at 8N so that the ends 1, 8, 16 still measure α before
-// a tail (NetRate::tail_alpha).
+// Every pass repeats a fixed part (0.56–0.65 of a round on emissive_mesh:
+// callgrind of omis_bench_first_pass --passes, budgets.txt), so a net is
+// reached in as few passes as fit; growth stops at 8N so that the ends 1, 8,
+// 16 still measure α before a tail (NetRate::tail_alpha).
 constexpr int kMostGrowth = 8;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
