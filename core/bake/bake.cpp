@@ -801,7 +801,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
     pass.tail = next.tail;
     if (next.tail && 2 * next.rounds != done_rounds_)
         pass.weight = budget_.per_round * tail_weight(power_of_two_floor(done_rounds_),
-                                                      next.rounds, rate_.alpha());
+                                                      next.rounds, rate_.tail_alpha());
     return true;
 }
 

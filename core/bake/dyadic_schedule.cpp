@@ -38,12 +38,15 @@ DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_lef
             pass.rounds = rounds_left;
             return pass;
         }
-        // To 4N wherever its 3N rounds fit with kFourfoldMargin to spare:
-        // reaching 4N by 2N first costs one more pass (its fixed part) for
+        // To 8N or 4N wherever its rounds fit with kGrowthMargin to spare:
+        // reaching it by 2N first costs one more pass (its fixed part) for
         // the same net, but measures the cost again half-way.
-        if (3.0 * done <= kFourfoldMargin * fit && 3 * done <= rounds_left) {
-            pass.rounds = 3 * done;  // to 4N
-            return pass;
+        for (int growth = kMostGrowth; growth >= 4; growth /= 2) {
+            const double rounds = double(growth - 1) * done;
+            if (rounds <= kGrowthMargin * fit && rounds <= rounds_left) {
+                pass.rounds = int(rounds);
+                return pass;
+            }
         }
         if (done <= can) {
             pass.rounds = done;  // to 2N

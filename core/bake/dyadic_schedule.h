@@ -35,18 +35,24 @@ struct DyadicPass {
 // The next pass after `done` rounds (a power of two, or 0 when a probe pass
 // was dropped; a power of two plus tails after a tail), when the time left
 // fits `fit` more rounds and at most `rounds_left` remain. `min_rounds`: the
-// smallest pass from round 0. Growth: to 4N while 3N rounds fit in
-// kFourfoldMargin of the time left, else to 2N while N fit; else a tail, as
-// large as fits but no larger than half the block before it (blocks stay
-// aligned nets), and none smaller than N/kSmallestTail (a tiny block adds
-// little and each pass costs a fixed part).
+// smallest pass from round 0. Growth: to 8N while 7N rounds fit in
+// kGrowthMargin of the time left, else to 4N while 3N do, else to 2N while N
+// fit; else a tail, as large as fits but no larger than half the block
+// before it (blocks stay aligned nets), and none smaller than
+// N/kSmallestTail (a tiny block adds little and each pass costs a fixed
+// part).
 constexpr int kSmallestTail = 16;
 // A pass runs up to ~1.2× its predicted duration (PassTimer, p90 over 114
-// passes on the shared machine, bench/results/budgets.txt): a 3N pass
+// passes on the shared machine, bench/results/budgets.txt): a pass
 // predicted to take all the time left would end the budget that much late.
 // (Half, as before, made emissive_mesh's 0.25 s bake 1, +1, +1 rounds where
 // 1, +3 fit.)
-constexpr double kFourfoldMargin = 0.8;
+constexpr double kGrowthMargin = 0.8;
+// Every pass repeats a fixed part (0.56–0.65 of a round on emissive_mesh:
+// callgrind of omis_bench_first_pass --passes, budgets.txt), so a net is
+// reached in as few passes as fit; growth stops at 8N so that the ends 1, 8,
+// 16 still measure α before a tail (NetRate::tail_alpha).
+constexpr int kMostGrowth = 8;
 DyadicPass next_dyadic_pass(int done, double fit, int min_rounds, int rounds_left);
 
 // After an optimal strategy's probe of `probe_rounds` (done = 0): the first
@@ -104,6 +110,15 @@ public:
     void reset() { *this = NetRate{}; }
     double alpha() const { return alpha_; }
     bool measured() const { return measured_; }
+    // The α a tail weighs by (tail_weight): the measured one, else
+    // kUnmeasuredAlpha. With weights from an assumed a where the error falls
+    // as N^-α, a tail of R = rN raises the net's error only where
+    // r^(a−α) > 2 + r^a: a = 2 never does for α ≤ 2 (and by ≤ 1.2 % at
+    // α = 2.5, r = 1/8), while a = 1 — equal weights — raised principled_r0's
+    // (α ≈ 2.2: 1.25N worse than N, above). Fewer ends are measured where a
+    // pass grows 8×.
+    static constexpr double kUnmeasuredAlpha = 2.0;
+    double tail_alpha() const { return measured_ ? alpha_ : kUnmeasuredAlpha; }
 
 private:
     std::vector<int> ends_;

@@ -14,17 +14,26 @@
 
 using namespace omis;
 
-TEST_CASE("dyadic passes: to 2N or 4N, then tails that halve", "[bake][schedule]") {
+TEST_CASE("dyadic passes: to 2N, 4N or 8N, then tails that halve", "[bake][schedule]") {
     const int lots = 1 << 30;
-    // From N rounds: 4N wherever 3N fit with the margin (one pass, one fixed
-    // part, where 2N then 4N would pay two), else 2N.
-    CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(1, 3.03 / kFourfoldMargin, 1, lots).rounds == 3);
-    CHECK(next_dyadic_pass(1, 2.97 / kFourfoldMargin, 1, lots).rounds == 1);
-    CHECK(next_dyadic_pass(4, 12.1 / kFourfoldMargin, 1, lots).rounds == 12);
-    CHECK(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).rounds == 4);
-    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kFourfoldMargin, 1, lots).tail);
-    CHECK(next_dyadic_pass(4, 100, 1, 11).rounds == 4);  // 3N beyond the rounds left
+    // From N rounds: 8N wherever 7N fit with the margin, else 4N wherever 3N
+    // do (one pass, one fixed part, where 2N then 4N would pay two), else 2N.
+    CHECK(next_dyadic_pass(1, 100, 1, lots).rounds == 7);
+    CHECK(next_dyadic_pass(1, 7.07 / kGrowthMargin, 1, lots).rounds == 7);
+    CHECK(next_dyadic_pass(1, 6.93 / kGrowthMargin, 1, lots).rounds == 3);
+    CHECK(next_dyadic_pass(1, 3.03 / kGrowthMargin, 1, lots).rounds == 3);
+    CHECK(next_dyadic_pass(1, 2.97 / kGrowthMargin, 1, lots).rounds == 1);
+    CHECK(next_dyadic_pass(4, 28.1 / kGrowthMargin, 1, lots).rounds == 28);
+    CHECK(next_dyadic_pass(4, 27.9 / kGrowthMargin, 1, lots).rounds == 12);
+    CHECK(next_dyadic_pass(4, 12.1 / kGrowthMargin, 1, lots).rounds == 12);
+    CHECK(next_dyadic_pass(4, 11.9 / kGrowthMargin, 1, lots).rounds == 4);
+    CHECK_FALSE(next_dyadic_pass(4, 11.9 / kGrowthMargin, 1, lots).tail);
+    CHECK(next_dyadic_pass(4, 100, 1, 27).rounds == 12);  // 7N beyond the rounds left
+    CHECK(next_dyadic_pass(4, 100, 1, 11).rounds == 4);   // 3N too
+    // Growth never passes 8N, however much fits.
+    CHECK(next_dyadic_pass(2, 1e6, 1, lots).rounds == 14);
+    // No overflow near the largest sample budgets.
+    CHECK(next_dyadic_pass(1 << 28, 1e12, 1, lots).rounds == 3 << 28);
     // 2N does not fit: a tail, the largest power of two that fits.
     DyadicPass p = next_dyadic_pass(32, 31, 1, lots);
     CHECK(p.rounds == 16);
@@ -58,7 +67,7 @@ TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the
     CHECK(after.pass.rounds == 1);
     CHECK_FALSE(after.pass.tail);
     // ... or to 4 where three rounds fit.
-    after = pass_after_probe(1, 3.03 / kFourfoldMargin, 8, lots);
+    after = pass_after_probe(1, 3.03 / kGrowthMargin, 8, lots);
     CHECK(after.keep_probe);
     CHECK(after.pass.rounds == 3);
     // Not even a round fits: the bake ends on the probe.
@@ -124,6 +133,34 @@ TEST_CASE("NetRate recovers α from the changes of nested means", "[bake][schedu
     steep.add(8, 1.0);
     steep.add(16, 1e-6);
     CHECK(steep.alpha() == NetRate::kMaxAlpha);
+}
+
+TEST_CASE("a tail weighs by the measured α, else by one that never raises the error much",
+          "[bake][schedule]") {
+    NetRate rate;
+    rate.add(1, 0);
+    rate.add(8, 1e-2);  // one change (a pass that grew 8×): α unknown
+    CHECK_FALSE(rate.measured());
+    CHECK(rate.tail_alpha() == NetRate::kUnmeasuredAlpha);
+    rate.add(16, 1e-2 * (std::pow(8.0, -1.5) - std::pow(16.0, -1.5)) /
+                     (1 - std::pow(8.0, -1.5)));
+    CHECK(rate.measured());
+    CHECK(rate.tail_alpha() == rate.alpha());
+    // The running mean of a net of N rounds (error v) and a tail of rN at
+    // tail_weight's weights with the assumed α: its error (v + w²·v·r^-α) /
+    // (1 + w)², w = r^a, against the net's alone, for scenes whose error
+    // falls as N^-α with α from independent draws (1) to smooth light (2.5).
+    auto joined = [](double r, double assumed, double alpha) {
+        const double w = tail_weight(1 << 10, int(r * (1 << 10)), assumed) / (1 << 10);
+        return (1 + w * w * std::pow(r, -alpha)) / ((1 + w) * (1 + w));
+    };
+    for (double r : {0.5, 0.25, 0.125, 0.0625})
+        for (double alpha : {1.0, 1.5, 2.0, 2.5}) {
+            INFO("tail " << r << "N, α " << alpha);
+            CHECK(joined(r, NetRate::kUnmeasuredAlpha, alpha) < 1.013);
+        }
+    // Equal weights (α = 1 assumed) raise a smooth scene's error by half.
+    CHECK(joined(0.25, 1.0, 2.2) > 1.4);
 }
 
 TEST_CASE("a time-budget bake ends on a power of two of rounds (plus tails) and stays "
