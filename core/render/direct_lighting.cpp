@@ -49,7 +49,7 @@ LightingContext::TinyShape tiny_shape_of(const Light& light) {
     if (light.type == LightType::Triangle) {
         const TriangleLight& t = light.triangle;
         s.centroid = (t.p0 + t.p1 + t.p2) / 3.0;
-        s.area_limit = t.area() / kTinySolidAngle;
+        s.area_limit = light.triangle_area / kTinySolidAngle;
     }
     if (light.type == LightType::Rect) {
         const RectLight& r = light.rect;
