@@ -132,9 +132,16 @@ Vec3 planar_normal(const Light& l) {
     }
 }
 
+// normalize(planar_normal(l)); a triangle's from its area, the normal's
+// length over 2 (the same division: bit for bit).
+Vec3 planar_unit_normal(const Light& l) {
+    if (l.type == LightType::Triangle) return planar_normal(l) / (2 * l.triangle_area);
+    return normalize(planar_normal(l));
+}
+
 // Radiance leaving a planar light toward x along −w, or zero from its back.
 Vec3 planar_radiance(const Light& l, const Vec3& w) {
-    const Vec3 normal = normalize(planar_normal(l));
+    const Vec3 normal = planar_unit_normal(l);
     double cos_l = -dot(w, normal);
     if (l.two_sided) cos_l = std::abs(cos_l);
     if (cos_l <= 0) return {};
@@ -348,6 +355,7 @@ Light make_triangle_light(const Vec3& p0, const Vec3& p1, const Vec3& p2,
     Light l;
     l.type = LightType::Triangle;
     l.triangle = TriangleLight{p0, p1, p2};
+    l.triangle_area = l.triangle.area();
     l.emission = radiance;
     l.two_sided = two_sided;
     return l;
@@ -562,7 +570,8 @@ std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, co
             return r->sample_parallel(x, n, u1, u2);
         }
         case LightType::Triangle:
-            if (sampler == ShapeSampler::Area) return l.triangle.sample_area(x, u1, u2);
+            if (sampler == ShapeSampler::Area)
+                return l.triangle.sample_area(x, u1, u2, l.triangle_area);
             if (sampler == ShapeSampler::SolidAngle)
                 return l.triangle.sample_solid_angle(x, n, u1, u2);
             return l.triangle.sample_parallel(x, n, u1, u2);
@@ -617,7 +626,7 @@ double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3
             return r->pdf_parallel(x, n, w);
         }
         case LightType::Triangle:
-            if (sampler == ShapeSampler::Area) return l.triangle.pdf_area(x, w);
+            if (sampler == ShapeSampler::Area) return l.triangle.pdf_area(x, w, l.triangle_area);
             if (sampler == ShapeSampler::SolidAngle) return l.triangle.pdf_solid_angle(x, n, w);
             return l.triangle.pdf_parallel(x, n, w);
         case LightType::Ellipse: {
@@ -659,7 +668,7 @@ double spread_weighted_irradiance(const Light& l, const Vec3& x, const Vec3& n, 
                                   Inside inside, double a0, double a1, double b0, double b1,
                                   int cells) {
     constexpr int kTaps = 3, kEdgeTaps = 4;
-    const Vec3 normal = normalize(planar_normal(l));
+    const Vec3 normal = planar_unit_normal(l);
     const SpreadProfile spread(l.spread_constants);
     const double da = (a1 - a0) / cells, db = (b1 - b0) / cells;
     // Kernel-weighted mean of the spread factor over a cell; `mixed` tells

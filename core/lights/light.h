@@ -38,6 +38,10 @@ struct alignas(64) Light {
     Vec3 emission;
     double spread = kPi;     // Rect/Ellipse: Blender's spread angle
     TriangleLight triangle;  // Triangle (emissive mesh triangle)
+    // Triangle: triangle.area(), made once: a sample's tiny-light test, area
+    // draw and density and the emitted radiance's normal took its cross
+    // product's length (a square root) at every call.
+    double triangle_area = 0;
 
     RectLight rect;          // Rect
     EllipseLight ellipse;    // Ellipse (disk when the semi-axes are equal)

@@ -49,7 +49,7 @@ LightingContext::TinyShape tiny_shape_of(const Light& light) {
     if (light.type == LightType::Triangle) {
         const TriangleLight& t = light.triangle;
         s.centroid = (t.p0 + t.p1 + t.p2) / 3.0;
-        s.area_limit = t.area() / kTinySolidAngle;
+        s.area_limit = light.triangle_area / kTinySolidAngle;
     }
     if (light.type == LightType::Rect) {
         const RectLight& r = light.rect;
@@ -209,9 +209,33 @@ struct PointLighting::Impl {
         double u1 = 0, u2 = 0;
         double fu = 0, fv = 0;
     };
+    // A selector technique's draw, made one sample ahead (shade): its
+    // footprint position, its light and the shape's pair (u1 the selection's
+    // rest). The drawn light's record, whose first read after the tree walk
+    // was a cache miss among thousands of lights (~8 % of a sample at 16k
+    // emissive triangles), is then read while the sample before traces its
+    // ray. The same draw as at the sample: the tree's memo is a cache.
+    struct SelectorDraw {
+        int k = -1;  // -1: none made
+        const ScrambledSobol* sequence = nullptr;
+        std::uint32_t index = 0;
+        const LightSelector* selector = nullptr;  // technique k's
+        SurfacePoint p;
+        double u1 = 0, u2 = 0;
+        std::optional<SelectedLight> light;
+        bool is(int k_, const ScrambledSobol& sequence_, std::uint32_t index_) const {
+            return k == k_ && sequence == &sequence_ && index == index_;
+        }
+    };
+    void draw_selector(int k, const ScrambledSobol& sequence, std::uint32_t index,
+                       const SurfacePoint& centre, const Footprint* footprint, SelectorDraw& d);
+    SelectorDraw selector_draws_[2];  // shade's: the sample's and the next one's
+    // `drawn` for a technique that draws from a per-point table, `selected`
+    // for one that draws from a selector (null for `bsdf`).
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
-                     const Estimators* into, int n_into, const TableDraw& drawn);
+                     const Estimators* into, int n_into, const TableDraw& drawn,
+                     const SelectorDraw* selected);
     // Sample allocation (issue 10): where each technique's draws of a call
     // start in each stream's sequence — after those of the earlier calls,
     // whose counts may differ from the settings' — and the pilot recording.
@@ -413,7 +437,6 @@ struct PointLighting::Impl {
     int next_anchor_slot_ = 0;
     void set_anchor(const Footprint* footprint);
     double centre_weight(std::size_t i, const SurfacePoint& centre);
-    std::optional<SelectedLight> pick_light(int k, const Vec3& x, const Vec3& n, double u);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
@@ -518,6 +541,11 @@ struct PointLighting::Impl {
     const bool own_light_estimates_ = std::none_of(
         p_.scene.lights().begin(), p_.scene.lights().end(),
         [](const Light& l) { return l.type == LightType::Triangle; });
+    // Whether shade draws each selector sample's light one sample ahead
+    // (SelectorDraw; set after p_). Among few lights (kMaxTinyShapeTable's
+    // bound) their records stay in cache: the look-ahead's bookkeeping, ~140
+    // instructions a sample, would buy nothing.
+    const bool draw_next_ahead_ = p_.scene.lights().size() > kMaxTinyShapeTable;
     // integrand_to_blocker applies (set after p_). Among emissive triangles:
     // with analytic lights alone, integrand() often needs only an occlusion
     // ray, cheaper than a closest hit.
@@ -573,6 +601,15 @@ struct PointLighting::Impl {
         return true;
     }
     LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
+    // The light the sample being taken drew from `selector` at its position,
+    // and the pmf the draw formed: its density takes that pmf, which the
+    // memo no longer holds once the next sample's light is drawn
+    // (SelectorDraw). The same product pmf() would form.
+    struct DrawnSelection {
+        const LightSelector* selector = nullptr;
+        std::uint32_t light = ~0u;
+        double pmf = 0;
+    } drawn_selection_;
     // The texel being shaded as a region (LightSelector::Receiver): a ball
     // about its centre through its footprint's corners (radius 0: none).
     // Selectors draw with the region's pmfs at every sample inside it — one
@@ -879,19 +916,34 @@ double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& cen
     return unoccluded_irradiance(light, centre.x, centre.n);
 }
 
-std::optional<SelectedLight> PointLighting::Impl::pick_light(int k, const Vec3& x,
-                                                             const Vec3& n, double u) {
-    const Technique& t = p_.settings.techniques[k];
-    if (const LightSelector* s = p_.selector(t.selection)) {
-        LightSelector::Memo* memo;
-        const LightSelector::Receiver at = receiver_at(x, n, memo);
-        return s->sample(at, u, memo);
+// The selection takes u1 of the shape's pair, and the shape its rest within
+// the chosen light's share (SelectedLight::rest), as Cycles does: the draws
+// that choose one light then keep the pair's 2-D stratification, where an
+// independent selection dimension left each light a random subset of it.
+// Group 1 fills u1's bits below its 32 (u1 then uniform on [0, 1) and its
+// rest keeps them). Measured per sample on the emissive_mesh race scene (the
+// sphere hiding part of the square light): relMSE 0.74×, 0.54×, 0.34× at 16,
+// 64, 256 samples, most in the penumbra (bench/results/error_sources.txt,
+// h-emesh9).
+void PointLighting::Impl::draw_selector(int k, const ScrambledSobol& sequence,
+                                        std::uint32_t index, const SurfacePoint& centre,
+                                        const Footprint* footprint, SelectorDraw& d) {
+    d.k = k;
+    d.sequence = &sequence;
+    d.index = index;
+    d.selector = p_.selector(p_.settings.techniques[k].selection);
+    if (footprint) {
+        double fu, fv;
+        sequence.get_2d(index, 0, fu, fv);
+        d.p = footprint->at(fu, fv);
+    } else {
+        d.p = centre;
     }
-    const LightChoice& c = choices_[k];
-    const std::size_t i = std::min<std::size_t>(
-        std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1);
-    const double lo = i > 0 ? c.cdf[i - 1] : 0.0;
-    return SelectedLight{c.lights[i], c.probability[i], rescale_within(u, lo, c.cdf[i] - lo)};
+    sequence.get_2d(index, 2, d.u1, d.u2);
+    LightSelector::Memo* memo;
+    const LightSelector::Receiver at = receiver_at(d.p.x, d.p.n, memo);
+    d.light = d.selector->sample(at, d.u1 + sequence.get_1d(index, 1) * 0x1.0p-32, memo);
+    if (d.light) d.u1 = d.light->rest;
 }
 
 const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& x,
@@ -1137,10 +1189,14 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         const std::vector<std::uint32_t>& along = along_.lights;
         LightSelector::Memo* memo;
         const LightSelector::Receiver at = receiver_at(x, n, memo);
-        for (std::size_t i = 0; i < along.size(); ++i)
+        for (std::size_t i = 0; i < along.size(); ++i) {
             // The shape's density first: it is 0 for most extra candidates,
             // and then the tree need not be walked.
-            if (shape[i] > 0) pdf += s->pmf(at, along[i], memo) * shape[i];
+            if (!(shape[i] > 0)) continue;
+            const DrawnSelection& d = drawn_selection_;
+            pdf += (s == d.selector && along[i] == d.light ? d.pmf : s->pmf(at, along[i], memo)) *
+                   shape[i];
+        }
         return pdf;
     }
     const LightChoice& c = choices_[k];
@@ -1440,36 +1496,35 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const ScrambledSobol& sequence, std::uint32_t index,
                                       const SurfacePoint& centre, const Footprint* footprint,
                                       const Estimators* into, int n_into,
-                                      const TableDraw& drawn) {
+                                      const TableDraw& drawn, const SelectorDraw* selected) {
     ++counters.samples;
     // Cancellation within a point (huge counts): see keep_going.
     if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
         throw LightingCancelled{};
     // Dimension groups of the sequence: 0 footprint position, 1 the light
     // selection's bits below group 2's (a selector draws with the first
-    // coordinate of group 2, below), 2 light shape or BSDF direction (a light
-    // drawn from a per-point table takes its footprint position and shape
-    // from its own sequence: `drawn`).
-    SurfacePoint p = centre;
-    if (footprint) {
-        double fu, fv;
-        if (drawn.slot >= 0) {
-            fu = drawn.fu;
-            fv = drawn.fv;
-        } else {
-            sequence.get_2d(index, 0, fu, fv);
-        }
-        p = footprint->at(fu, fv);
-        ++point_serial_;  // the solid-angle cache holds one position's shapes
-    }
+    // coordinate of group 2: draw_selector), 2 light shape or BSDF direction
+    // (a light drawn from a per-point table takes its footprint position and
+    // shape from its own sequence: `drawn`).
     const int k = active.all[a];
     const Technique& t = p_.settings.techniques[k];
+    SurfacePoint p = centre;
+    if (footprint) {
+        if (selected) {
+            p = selected->p;
+        } else {
+            double fu = drawn.fu, fv = drawn.fv;
+            if (t.bsdf) sequence.get_2d(index, 0, fu, fv);
+            p = footprint->at(fu, fv);
+        }
+        ++point_serial_;  // the solid-angle cache holds one position's shapes
+    }
     const int hidden_index =
         into[0].hidden && in_hidden_part(k)
             ? int(std::find(active.hidden.begin(), active.hidden.end(), k) - active.hidden.begin())
             : -1;
-    double u1, u2;  // group 2, unless a table draw brings its light's own
-    if (t.bsdf || drawn.slot < 0) sequence.get_2d(index, 2, u1, u2);
+    double u1 = drawn.u1, u2 = drawn.u2;  // a table draw brings its light's own
+    if (t.bsdf) sequence.get_2d(index, 2, u1, u2);
     Vec3 w;
     bool ok;
     // The point's only technique draws lights: no weights to form, so a
@@ -1483,6 +1538,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     double own_density = 0, drawn_distance = 0;
     const bool own_light_only =
         own_light_estimates_ && active.all.size() == 1 && !t.bsdf && !pilot_;
+    drawn_selection_ = {};  // none but this sample's own
     if (t.bsdf) {
         w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
         ok = dot(w, p.n) > 0;
@@ -1490,21 +1546,11 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         if (drawn.slot >= 0) {
             const LightChoice& c = choices_[k];
             light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
-            u1 = drawn.u1;
-            u2 = drawn.u2;
         } else {
-            // The selection takes u1 of the shape's pair, and the shape its
-            // rest within the chosen light's share (SelectedLight::rest), as
-            // Cycles does: the draws that choose one light then keep the
-            // pair's 2-D stratification, where an independent selection
-            // dimension left each light a random subset of it. Group 1 fills
-            // u1's bits below its 32 (u1 then uniform on [0, 1) and its rest
-            // keeps them). Measured per sample on the emissive_mesh race scene
-            // (the sphere hiding part of the square light): relMSE 0.74×,
-            // 0.54×, 0.34× at 16, 64, 256 samples, most in the penumbra (bench/
-            // results/error_sources.txt, h-emesh9).
-            light = pick_light(k, p.x, p.n, u1 + sequence.get_1d(index, 1) * 0x1.0p-32);
-            if (light) u1 = light->rest;
+            light = selected->light;
+            u1 = selected->u1;
+            u2 = selected->u2;
+            if (light) drawn_selection_ = {selected->selector, light->light, light->pmf};
         }
         const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
@@ -2179,6 +2225,39 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     const bool by_stream_only = plan.by_stream && !plan.in_whole;
     ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
                                                                  : nullptr);
+    // Technique k's draw j of round r: its index in its stream's sequence.
+    auto index_of = [&](int k, int r, int j) {
+        const int s = r % K;
+        return draw_start(k, s) +
+               (std::uint32_t(r / K) - std::uint32_t(rounds_in_stream(s, first_round, K))) *
+                   std::uint32_t(counts[k]) +
+               std::uint32_t(j);
+    };
+    // Techniques whose lights come from a selector: each sample's light is
+    // drawn into selector_draws_[now], and among many lights one sample
+    // ahead, into the other slot (SelectorDraw).
+    auto draws_ahead = [&](int k) {
+        return !p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
+    };
+    int now = 0;
+    for (SelectorDraw& d : selector_draws_) d.k = -1;  // last call's: other sequences
+    // Draws the light of the sample after (r, a, j), in the loop's order.
+    auto draw_after = [&](int r, std::size_t a, int j) {
+        ++j;
+        while (j >= counts[active.all[a]]) {
+            j = 0;
+            if (++a == active.all.size()) {
+                a = 0;
+                if (++r == first_round + rounds) return;
+            }
+        }
+        const int k = active.all[a];
+        if (!draws_ahead(k)) return;
+        SelectorDraw& next = selector_draws_[1 - now];
+        draw_selector(k, technique_sequence(std::size_t(k), r % K), index_of(k, r, j), centre,
+                      footprint, next);
+        if (next.light) prefetch_light(next.light->light);
+    };
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
         const std::uint32_t round_in_stream = std::uint32_t(r / K);
@@ -2201,14 +2280,18 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             const ScrambledSobol& seq = technique_sequence(std::size_t(k), s);
             const bool table = light_streams.uses_table(k);
             for (int j = 0; j < counts[k]; ++j) {
-                const std::uint32_t index =
-                    draw_start(k, s) +
-                    (round_in_stream - std::uint32_t(rounds_in_stream(s, first_round, K))) *
-                        std::uint32_t(counts[k]) +
-                    std::uint32_t(j);
+                const std::uint32_t index = index_of(k, r, j);
+                SelectorDraw* selected = nullptr;
+                if (draws_ahead(k)) {
+                    selected = &selector_draws_[now];
+                    if (!selected->is(k, seq, index))
+                        draw_selector(k, seq, index, centre, footprint, *selected);
+                }
+                if (draw_next_ahead_) draw_after(r, a, j);
                 take_sample(active, a, seq, index, centre, footprint, into,
                             by_stream_only ? 2 : 1,
-                            table ? light_streams.draw(k, s, seq, index) : TableDraw{});
+                            table ? light_streams.draw(k, s, seq, index) : TableDraw{}, selected);
+                now = 1 - now;
             }
         }
     }

@@ -67,6 +67,10 @@ NormalAndArea normal_and_area(const Vec3& c, double scale) {
     const double len = length(c);
     return {c / len, scale * len};
 }
+// The same with the area known: |c| = area / scale exactly (scale 1 or 1/2).
+NormalAndArea normal_of_area(const Vec3& c, double scale, double area) {
+    return {c / (area / scale), area};
+}
 
 // Distance along w to the plane (x + a, normal n), ignoring the light's extent: used
 // for directions that a sampler already placed on the light.
@@ -180,15 +184,24 @@ double TriangleLight::solid_angle(const Vec3& x) const {
 
 std::optional<LightSample> TriangleLight::sample_area(const Vec3& x, double u1,
                                                       double u2) const {
-    const Point2 b = sample_uniform_triangle(u1, u2);
-    const NormalAndArea f = normal_and_area(cross(p1 - p0, p2 - p0), 0.5);
-    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y, f.normal, f.area);
+    return sample_area(x, u1, u2, area());
 }
 
 double TriangleLight::pdf_area(const Vec3& x, const Vec3& w) const {
+    return pdf_area(x, w, area());
+}
+
+std::optional<LightSample> TriangleLight::sample_area(const Vec3& x, double u1, double u2,
+                                                      double area) const {
+    const Point2 b = sample_uniform_triangle(u1, u2);
+    const NormalAndArea f = normal_of_area(cross(p1 - p0, p2 - p0), 0.5, area);
+    return area_sample_record((p0 - x) + (p1 - p0) * b.x + (p2 - p0) * b.y, f.normal, f.area);
+}
+
+double TriangleLight::pdf_area(const Vec3& x, const Vec3& w, double area) const {
     const auto hit = intersect(x, w);
     if (!hit) return 0.0;
-    const NormalAndArea f = normal_and_area(cross(p1 - p0, p2 - p0), 0.5);
+    const NormalAndArea f = normal_of_area(cross(p1 - p0, p2 - p0), 0.5, area);
     return area_pdf(hit, w, f.normal, f.area);
 }
 

@@ -90,6 +90,11 @@ struct TriangleLight {
 
     std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2) const;
     double pdf_area(const Vec3& x, const Vec3& w) const;
+    // The same with area() given (kept by its owner: Light::triangle_area),
+    // bit for bit, without its square root.
+    std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2,
+                                           double area) const;
+    double pdf_area(const Vec3& x, const Vec3& w, double area) const;
     std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
     double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
     std::optional<LightSample> sample_solid_angle(const Vec3& x, const Vec3& n, double u1,
