@@ -400,7 +400,7 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
     const std::uint32_t index = std::uint32_t(wide_.size());
     wide_.emplace_back();
     links_.emplace_back();
-    ranges_.emplace_back();
+    child_cdf_.emplace_back();
     std::uint32_t members[kWidth];
     int count = 0;
     if (nodes_[binary].light != ~0u) {
@@ -419,11 +419,11 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
         const Node& member = nodes_[members[i]];
         const std::uint64_t path = trail | (std::uint64_t(i) << (2 * depth));
         wide_[index].set(i, member.bounds);
-        ChildRanges& range = ranges_[index];
-        range.start[i] = member.first;
-        range.cdf[i] = order_[member.first].cdf;
-        range.start[i + 1] = member.end;  // the next child's start, or the end
-        range.cdf[i + 1] = order_[member.end].cdf;
+        WideLinks& links = links_[index];
+        links.start[i] = member.first;
+        links.start[i + 1] = member.end;  // the next child's start, or the end
+        child_cdf_[index].cdf[i] = order_[member.first].cdf;
+        child_cdf_[index].cdf[i + 1] = order_[member.end].cdf;
         if (member.light != ~0u) {
             links_[index].index[i] = member.light;
             links_[index].is_leaf |= std::uint8_t(1u << i);
@@ -665,8 +665,9 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
 // too. (A secant step from the guess on its own power read fewer lines, but
 // its second read waits on the first, where the gallop's first probes are
 // issued at once: position_in took 1.3x the time.)
-std::uint32_t LightSelector::position_in(const ChildRanges& range, int i, double u) const {
-    const std::uint32_t begin = range.start[i], end = range.start[i + 1];
+std::uint32_t LightSelector::position_in(const WideLinks& links, const ChildCdf& range, int i,
+                                        double u) const {
+    const std::uint32_t begin = links.start[i], end = links.start[i + 1];
     const double target = range.cdf_point(i, u);
     // The last position p in [begin, end) with order_[p].cdf <= target (begin
     // at least): the interval that holds target, as upper_bound over the range
@@ -750,8 +751,8 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
             light = links.index[i];
         } else if (clusters & (1u << i)) {
             // A cluster: its lights ∝ power, u in its share of their CDF.
-            const ChildRanges& range = ranges_[node];
-            const std::uint32_t position = position_in(range, i, u);
+            const ChildCdf& range = child_cdf_[node];
+            const std::uint32_t position = position_in(links, range, i, u);
             const double step = order_[position + 1].cdf - order_[position].cdf;
             pmf *= step / range.power(i);
             light = order_[position].light;
@@ -793,10 +794,9 @@ double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) c
         pmf *= child_probabilities(node, at, memo, scratch, clusters)[i];
         if (links.is_leaf & (1u << i)) return links.index[i] == light ? pmf : 0.0;
         if (clusters & (1u << i)) {
-            const ChildRanges& range = ranges_[node];
-            if (l.position < range.start[i] || l.position >= range.start[i + 1])
+            if (l.position < links.start[i] || l.position >= links.start[i + 1])
                 return 0;  // not in the tree
-            return pmf * (l.weight / range.power(i));
+            return pmf * (l.weight / child_cdf_[node].power(i));
         }
         node = links.index[i];
     }

@@ -225,20 +225,22 @@ private:
                                  float out[kWidth]) const;
     };
     // Where a wide node's children lead, apart from their bounds: a step down
-    // whose probabilities a memo holds reads only these 20 bytes (three
-    // nodes to a cache line) instead of the bounds' three lines.
+    // whose probabilities a memo holds reads only these 40 bytes instead of
+    // the bounds' three lines. start[i]: where child i's lights lie in leaf
+    // order, [start[i], start[i + 1]) — at hand with the step, so a draw
+    // inside a cluster child reads its guess's line at once.
     struct WideLinks {
         std::uint32_t index[kWidth] = {};     // wide node, or light id where is_leaf
+        std::uint32_t start[kWidth + 1] = {};
         std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
     };
-    // Where a wide node's children's lights lie in leaf order — child i's
-    // in [start[i], start[i + 1]) — and the power CDF at those places
-    // (cdf[i] = the CDF at start[i]): all that a draw inside a cluster child
-    // and its pmf need of the range, in one cache line, where reading the
-    // CDF at both ends was two misses among 100k lights.
-    struct alignas(64) ChildRanges {
+    // The power CDF where a wide node's children's lights start in leaf
+    // order (cdf[i] at start[i], cdf[count] at the end): what a draw inside a
+    // cluster child and its pmf need of the CDF besides their own place, in
+    // one cache line, read beside the guess's — where reading the CDF at both
+    // ends of the range was two misses among 100k lights.
+    struct alignas(64) ChildCdf {
         double cdf[kWidth + 1] = {};
-        std::uint32_t start[kWidth + 1] = {};
         // Child i's total power, as the CDF gives it.
         double power(int i) const { return cdf[i + 1] - cdf[i]; }
         // Where u ∈ [0, 1) falls on the power CDF of child i's range.
@@ -269,7 +271,8 @@ private:
                                       double scratch[kWidth], std::uint32_t& clusters) const;
     // The leaf position in child i's range whose share of the power CDF
     // holds u ∈ [0, 1) (a draw inside a cluster).
-    std::uint32_t position_in(const ChildRanges& range, int i, double u) const;
+    std::uint32_t position_in(const WideLinks& links, const ChildCdf& range, int i,
+                              double u) const;
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
     bool root_reaches(const Receiver& at, Memo* memo) const;
@@ -304,7 +307,7 @@ private:
     std::vector<Bounds> build_bounds_;  // per binary node, while building
     std::vector<WideNode> wide_;        // the root first
     std::vector<WideLinks> links_;      // per wide node
-    std::vector<ChildRanges> ranges_;   // per wide node
+    std::vector<ChildCdf> child_cdf_;   // per wide node
     PackedBounds root_;
     std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
     // The bounded lights in leaf order (a node's lie side by side), each
