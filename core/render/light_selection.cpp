@@ -301,7 +301,7 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
         }
         double running = 0;
         for (std::size_t i = 0; i < ids_.size(); ++i) {
-            per_light_[ids_[i]].probability = probability_[i] /= total;
+            per_light_[ids_[i]].weight = probability_[i] /= total;
             running += probability_[i];
             cdf_.push_back(running);
         }
@@ -329,16 +329,16 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
                 keys[i] = {entries[i].bounds.lo + entries[i].bounds.hi, i};
             build(entries, keys, 0, entries.size(), 0);
             // build() left `keys` in leaf order.
-            order_light_.reserve(entries.size());
-            order_cdf_.reserve(entries.size() + 1);
-            order_cdf_.assign(1, 0.0);
+            order_.resize(entries.size() + 1);
             clusters_ = true;
             for (std::size_t i = 0; i < entries.size(); ++i) {
                 const Entry& e = entries[keys[i].entry];
-                order_light_.push_back(e.light);
-                per_light_[e.light].position = std::uint32_t(i);
-                order_cdf_.push_back(order_cdf_.back() + e.bounds.power);
-                clusters_ = clusters_ && order_cdf_[i + 1] > order_cdf_[i];
+                order_[i].light = e.light;
+                order_[i + 1].cdf = order_[i].cdf + e.bounds.power;
+                PerLight& l = per_light_[e.light];
+                l.position = std::uint32_t(i);
+                l.weight = order_[i + 1].cdf - order_[i].cdf;
+                clusters_ = clusters_ && order_[i + 1].cdf > order_[i].cdf;
             }
             root_ = nodes_[0].bounds;
             collapse(0, 0, 0);
@@ -400,6 +400,7 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
     const std::uint32_t index = std::uint32_t(wide_.size());
     wide_.emplace_back();
     links_.emplace_back();
+    child_cdf_.emplace_back();
     std::uint32_t members[kWidth];
     int count = 0;
     if (nodes_[binary].light != ~0u) {
@@ -418,8 +419,11 @@ std::uint32_t LightSelector::collapse(std::uint32_t binary, std::uint64_t trail,
         const Node& member = nodes_[members[i]];
         const std::uint64_t path = trail | (std::uint64_t(i) << (2 * depth));
         wide_[index].set(i, member.bounds);
-        links_[index].first[i] = member.first;
-        links_[index].end = member.end;  // the last child's
+        WideLinks& links = links_[index];
+        links.start[i] = member.first;
+        links.start[i + 1] = member.end;  // the next child's start, or the end
+        child_cdf_[index].cdf[i] = order_[member.first].cdf;
+        child_cdf_[index].cdf[i + 1] = order_[member.end].cdf;
         if (member.light != ~0u) {
             links_[index].index[i] = member.light;
             links_[index].is_leaf |= std::uint8_t(1u << i);
@@ -656,17 +660,22 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
 // guess, and the search gallops out from it. Among 100k lights a binary
 // search over the whole range waited on a cache miss at nearly every step;
 // this one reads the guess's line and seldom another. The guess is the
-// answer for about 2 draws in 3 (99k emissive triangles): its light's record,
-// which the caller reads next, is started on too.
-std::uint32_t LightSelector::position_in(std::uint32_t begin, std::uint32_t end, double u) const {
-    const double target = cdf_point(begin, end, u);
-    // The last position p in [begin, end) with order_cdf_[p] <= target (begin
+// answer for about half the draws (bench_emitters' sphere of 99k triangles,
+// texels): its light's record, which the caller reads next, is started on
+// too. (A secant step from the guess on its own power read fewer lines, but
+// its second read waits on the first, where the gallop's first probes are
+// issued at once: position_in took 1.3x the time.)
+std::uint32_t LightSelector::position_in(const WideLinks& links, const ChildCdf& range, int i,
+                                        double u) const {
+    const std::uint32_t begin = links.start[i], end = links.start[i + 1];
+    const double target = range.cdf_point(i, u);
+    // The last position p in [begin, end) with order_[p].cdf <= target (begin
     // at least): the interval that holds target, as upper_bound over the range
     // finds it. `below` holds where that is true.
-    auto below = [&](std::uint32_t p) { return p == begin || order_cdf_[p] <= target; };
+    auto below = [&](std::uint32_t p) { return p == begin || order_[p].cdf <= target; };
     const std::uint32_t guess =
         std::min(begin + std::uint32_t(u * double(end - begin)), end - 1);
-    prefetch_record(records_ + order_light_[guess]);
+    prefetch_record(records_ + order_[guess].light);
     // Bracket the answer in [lo, hi] by steps of 1, 2, 4, … away from the guess.
     std::uint32_t lo = begin, hi = end - 1;
     if (below(guess)) {
@@ -742,13 +751,12 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
             light = links.index[i];
         } else if (clusters & (1u << i)) {
             // A cluster: its lights ∝ power, u in its share of their CDF.
-            std::uint32_t begin, end;
-            range_of(links, i, begin, end);
-            const std::uint32_t position = position_in(begin, end, u);
-            pmf *= share_in(position, begin, end);
-            light = order_light_[position];
-            u = rescale_within(cdf_point(begin, end, u), order_cdf_[position],
-                               order_cdf_[position + 1] - order_cdf_[position]);
+            const ChildCdf& range = child_cdf_[node];
+            const std::uint32_t position = position_in(links, range, i, u);
+            const double step = order_[position + 1].cdf - order_[position].cdf;
+            pmf *= step / range.power(i);
+            light = order_[position].light;
+            u = rescale_within(range.cdf_point(i, u), order_[position].cdf, step);
         }
         if (light != ~0u) {
             if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
@@ -764,7 +772,7 @@ double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) c
     if (kind_ != Kind::Tree) {
         const PerLight& l = per_light_[light];
         if (l.role == PerLight::Absent) return 0;
-        return kind_ == Kind::Uniform ? 1.0 / double(ids_.size()) : l.probability;
+        return kind_ == Kind::Uniform ? 1.0 / double(ids_.size()) : l.weight;
     }
     const bool tree = root_reaches(at, memo);
     // The light just drawn at `at`: the product its walk formed, without
@@ -786,10 +794,9 @@ double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) c
         pmf *= child_probabilities(node, at, memo, scratch, clusters)[i];
         if (links.is_leaf & (1u << i)) return links.index[i] == light ? pmf : 0.0;
         if (clusters & (1u << i)) {
-            std::uint32_t begin, end;
-            range_of(links, i, begin, end);
-            if (l.position < begin || l.position >= end) return 0;  // not in the tree
-            return pmf * share_in(l.position, begin, end);
+            if (l.position < links.start[i] || l.position >= links.start[i + 1])
+                return 0;  // not in the tree
+            return pmf * (l.weight / child_cdf_[node].power(i));
         }
         node = links.index[i];
     }

@@ -225,14 +225,26 @@ private:
                                  float out[kWidth]) const;
     };
     // Where a wide node's children lead, apart from their bounds: a step down
-    // whose probabilities a memo holds reads only these 20 bytes (three
-    // nodes to a cache line) instead of the bounds' three lines.
-    // first[i]: where child i's lights start in leaf order (they end where
-    // the next child's start, the last child's at `end`).
+    // whose probabilities a memo holds reads only these 40 bytes instead of
+    // the bounds' three lines. start[i]: where child i's lights lie in leaf
+    // order, [start[i], start[i + 1]) — at hand with the step, so a draw
+    // inside a cluster child reads its guess's line at once.
     struct WideLinks {
         std::uint32_t index[kWidth] = {};     // wide node, or light id where is_leaf
-        std::uint32_t first[kWidth] = {}, end = 0;
+        std::uint32_t start[kWidth + 1] = {};
         std::uint8_t count = 0, is_leaf = 0;  // is_leaf: bit i for child i
+    };
+    // The power CDF where a wide node's children's lights start in leaf
+    // order (cdf[i] at start[i], cdf[count] at the end): what a draw inside a
+    // cluster child and its pmf need of the CDF besides their own place, in
+    // one cache line, read beside the guess's — where reading the CDF at both
+    // ends of the range was two misses among 100k lights.
+    struct alignas(64) ChildCdf {
+        double cdf[kWidth + 1] = {};
+        // Child i's total power, as the CDF gives it.
+        double power(int i) const { return cdf[i + 1] - cdf[i]; }
+        // Where u ∈ [0, 1) falls on the power CDF of child i's range.
+        double cdf_point(int i, double u) const { return cdf[i] + u * power(i); }
     };
     std::uint32_t collapse(std::uint32_t binary, std::uint64_t trail, int depth);
     // The probability of each child of a wide node: ∝ the children's
@@ -257,23 +269,10 @@ private:
     // The same through a memo focused on `at` (root_reaches does so).
     const double* child_probabilities(std::uint32_t node, const Receiver& at, Memo* memo,
                                       double scratch[kWidth], std::uint32_t& clusters) const;
-    // Child i's lights in leaf order: [begin, end).
-    void range_of(const WideLinks& links, int i, std::uint32_t& begin, std::uint32_t& end) const {
-        begin = links.first[i];
-        end = i + 1 < links.count ? links.first[i + 1] : links.end;
-    }
-    // The share of leaf position `position` in the range [begin, end), by power.
-    double share_in(std::uint32_t position, std::uint32_t begin, std::uint32_t end) const {
-        return (order_cdf_[position + 1] - order_cdf_[position]) /
-               (order_cdf_[end] - order_cdf_[begin]);
-    }
-    // Where u ∈ [0, 1) falls on the power CDF of the range [begin, end).
-    double cdf_point(std::uint32_t begin, std::uint32_t end, double u) const {
-        return order_cdf_[begin] + u * (order_cdf_[end] - order_cdf_[begin]);
-    }
-    // The leaf position in [begin, end) whose share of the power CDF holds
-    // u ∈ [0, 1) (a draw inside a cluster).
-    std::uint32_t position_in(std::uint32_t begin, std::uint32_t end, double u) const;
+    // The leaf position in child i's range whose share of the power CDF
+    // holds u ∈ [0, 1) (a draw inside a cluster).
+    std::uint32_t position_in(const WideLinks& links, const ChildCdf& range, int i,
+                              double u) const;
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
     bool root_reaches(const Receiver& at, Memo* memo) const;
@@ -294,7 +293,9 @@ private:
     struct PerLight {
         enum Role : std::uint8_t { Absent, Selected, Unbounded };
         std::uint64_t trail = 0;  // Tree: child choices, root first, 2 bits each
-        double probability = 0;   // Power: the pmf
+        // Power: the pmf. Tree: the light's step of the leaf-order power CDF,
+        // which its share in a cluster divides (read here, not in the CDF).
+        double weight = 0;
         std::uint32_t position = 0;  // Tree: where it lies in leaf order
         Role role = Absent;       // Unbounded: sun, world beside the tree
     };
@@ -306,15 +307,21 @@ private:
     std::vector<Bounds> build_bounds_;  // per binary node, while building
     std::vector<WideNode> wide_;        // the root first
     std::vector<WideLinks> links_;      // per wide node
+    std::vector<ChildCdf> child_cdf_;   // per wide node
     PackedBounds root_;
     std::vector<std::uint32_t> unbounded_;  // sun, world: uniform beside the tree
-    // The bounded lights in leaf order (a node's lie side by side), and the
-    // cumulative sum of their powers (order_cdf_[0] = 0), for draws inside
-    // a cluster. clusters_ is false where some light's share of the sum
-    // rounds to 0 (a power below ~1e-16 of the total): then no node is a
-    // cluster, as such a light could never be drawn from one.
-    std::vector<std::uint32_t> order_light_;
-    std::vector<double> order_cdf_;
+    // The bounded lights in leaf order (a node's lie side by side), each
+    // beside the cumulative sum of the powers before it (order_[0].cdf = 0;
+    // one more entry holds the total), for draws inside a cluster: a guess's
+    // light comes with its place in the CDF. clusters_ is false where some
+    // light's share of the sum rounds to 0 (a power below ~1e-16 of the
+    // total): then no node is a cluster, as such a light could never be
+    // drawn from one.
+    struct Ordered {
+        double cdf = 0;
+        std::uint32_t light = ~0u;
+    };
+    std::vector<Ordered> order_;
     bool clusters_ = false;
 };
 

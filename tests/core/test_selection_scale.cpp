@@ -266,6 +266,23 @@ TEST_CASE("the light tree draws the lights of a small far cluster by power", "[s
             if (per_power[i] > per_power[i - 1] * (1 + 1e-9)) ++groups;
         CHECK(groups <= 4);
         if (p == 0) CHECK(draws_pvalue(s, {x, n, 0.0}, pmf, 200000, rng) > testing::kAlpha);
+        // Each light's draws are the u of one interval of length pmf (a
+        // share of the root's children, then a step of its cluster's power
+        // CDF): evenly spaced u then take it for pmf × count of them, give
+        // or take one at each end (1e-16 of rounding moves an end). The
+        // sizes vary 10×, so the search inside a cluster starts far from the
+        // answer in both directions.
+        const int grid = 1 << 20;
+        std::vector<int> drawn(lights.size());
+        for (int k = 0; k < grid; ++k) {
+            const auto d = s.sample(x, n, (k + 0.5) / grid, &memo);
+            REQUIRE(d);
+            ++drawn[d->light];
+        }
+        double worst = 0;
+        for (std::uint32_t l = 0; l < lights.size(); ++l)
+            worst = std::max(worst, std::abs(drawn[l] - pmf[l] * grid));
+        CHECK(worst < 2);
     }
 }
 
