@@ -93,6 +93,10 @@ public:
     // Throws std::invalid_argument / std::logic_error on bad settings or an
     // uncommitted scene.
     LightingContext(const Scene& scene, const DirectLightingSettings& settings);
+    // Hands its kept branching's block on to the next context (keep_region_branching).
+    ~LightingContext();
+    LightingContext(const LightingContext&) = delete;
+    LightingContext& operator=(const LightingContext&) = delete;
 
     const Scene& scene;
     const DirectLightingSettings settings;
@@ -169,7 +173,9 @@ public:
     // past kRegionBranchingBytes in all, none past it with one. The bound is
     // small because a bake's new pages cost their first touch: Blender's
     // allocator (jemalloc) hands a block below 8 MiB to the next bake as it
-    // is, a larger one anew (bench/results/emitters.txt).
+    // is, a larger one anew (bench/results/emitters.txt) — and even a smaller
+    // one anew at times, so contexts hand the block on themselves (one spare
+    // per process, at most this size).
     static constexpr std::size_t kRegionBranchingBytes = std::size_t(6) << 20;
     static constexpr std::size_t kMaxRegionNodes = 16;
     mutable std::vector<LightSelector::KeptNode> region_branching;
