@@ -2279,10 +2279,11 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
             const int k = active.all[a];
             const ScrambledSobol& seq = technique_sequence(std::size_t(k), s);
             const bool table = light_streams.uses_table(k);
+            const bool from_selector = draws_ahead(k);
             for (int j = 0; j < counts[k]; ++j) {
                 const std::uint32_t index = index_of(k, r, j);
                 SelectorDraw* selected = nullptr;
-                if (draws_ahead(k)) {
+                if (from_selector) {
                     selected = &selector_draws_[now];
                     if (!selected->is(k, seq, index))
                         draw_selector(k, seq, index, centre, footprint, *selected);
