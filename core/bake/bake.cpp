@@ -345,6 +345,8 @@ private:
     bool fits_per_pass() const {
         return is_optimal(settings_.lighting.strategy) && context_.techniques.size() >= 2;
     }
+    void size_first_pass();
+    void remember_pass_cost() const;
     void run_passes();
     bool noise_target_met() const;
     void record_pass(double sampling_start, bool tail);
@@ -354,6 +356,7 @@ private:
     void fill_margin();
     void fill_stats();
 
+    const Scene& scene_;
     const Mesh& mesh_;
     BakeSettings settings_;
     const BakeProgress& progress_;
@@ -386,6 +389,9 @@ private:
     bool last_done_ = true;
     bool time_ends_ = false;  // the last pass took the time left
     PassTimer timer_;
+    // The first pass's seconds beyond its rounds' sampling, as it measured
+    // them (negative: not measured), for Scene::remember_pass_cost.
+    double first_pass_fixed_ = -1;
     BakeStatus status_ = BakeStatus::Complete;
     // Time budgets without a noise target: passes end on powers of two
     // (dyadic_schedule.h); the running means' luminance at the last such end.
@@ -398,6 +404,21 @@ private:
     std::vector<TileAllocation> tiles_;
 };
 
+// The key a bake's measured pass cost is kept under in its Scene: what sets
+// the cost of a round (the mesh and its points, the techniques and their
+// counts, the streams, the threads), not the strategy (which costs per pass,
+// not per round) nor the budget.
+std::uint64_t bake_shape(const BakeSettings& s, const BakeLayout& layout) {
+    std::ostringstream key;
+    key << s.mesh << ' ' << int(s.target) << ' ' << layout.width << 'x' << layout.height << ' '
+        << layout.count << ' ' << s.smooth_normals << ' ' << s.lighting.streams << ' '
+        << tbb::this_task_arena::max_concurrency();
+    for (std::size_t k = 0; k < s.lighting.techniques.size(); ++k)
+        key << ' ' << s.lighting.techniques[k].name() << ':'
+            << (k < s.lighting.samples.size() ? s.lighting.samples[k] : 0);
+    return std::hash<std::string>{}(key.str());
+}
+
 BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
     settings.lighting.receiver = scene.mesh_receiver(settings.mesh);  // render/receiver.h
     settings.lighting.points_on_mesh = settings.mesh;  // texels and corners lie on it
@@ -409,7 +430,8 @@ BakeSettings with_receiver(const Scene& scene, BakeSettings settings) {
 
 Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgress& progress,
              Clock::time_point start)
-    : mesh_(scene.geometry().mesh(settings.mesh)),
+    : scene_(scene),
+      mesh_(scene.geometry().mesh(settings.mesh)),
       settings_(with_receiver(scene, settings)),
       progress_(progress),
       start_(start),
@@ -838,7 +860,35 @@ bool Baker::noise_target_met() const {
            });
 }
 
+// A time budget's first pass where an earlier bake of the same shape measured
+// its passes (Scene::measured_pass_cost): sized by that measure
+// (measured_first_pass), in place of the one-round pass that
+// otherwise measures the cost — and which an optimal strategy then replaces
+// (its probe). On emissive_mesh at 128² a round takes ~11 ms and a first
+// pass ~10 ms more: in a 0.05 s budget the probe and one more round ended at
+// one or two samples by a few ms either way, where two rounds in one pass fit.
+// Not taken below two rounds: one round is the probe's own size.
+void Baker::size_first_pass() {
+    if (!dyadic_) return;
+    const auto cost = scene_.measured_pass_cost(bake_shape(settings_, layout_));
+    if (!cost || !(cost->round > 0)) return;
+    const double left = settings_.time_budget - elapsed() - cost->first_pass_fixed;
+    const int rounds = measured_first_pass(left / cost->round, budget_.full_rounds);
+    if (rounds < 2) return;
+    next_rounds_ = rounds;
+    probe_ = false;  // a first net (or one too small for a solve: as a kept probe)
+}
+
+// What this bake's passes cost, for the next bake of its shape: the first
+// pass's fixed part, and a round at the rate the last pass ran.
+void Baker::remember_pass_cost() const {
+    const double round = timer_.per_sample() * budget_.per_round;
+    if (status_ == BakeStatus::Cancelled || first_pass_fixed_ < 0 || !(round > 0)) return;
+    scene_.remember_pass_cost(bake_shape(settings_, layout_), {first_pass_fixed_, round});
+}
+
 void Baker::run_passes() {
+    size_first_pass();
     const double sampling_start = elapsed();
     for (;;) {
         Pass pass;
@@ -898,6 +948,7 @@ void Baker::time_pass(std::uint32_t samples, double seconds) {
         return;
     }
     const double repeated = std::clamp(1.0 - setup / shading, 0.0, 1.0);
+    first_pass_fixed_ = seconds * std::max(0.0, 1.0 - rounds / shading);
     timer_.add(samples, seconds * repeated);
     timer_.set_fixed(seconds * std::max(0.0, repeated - rounds / shading));
 }
@@ -1006,6 +1057,7 @@ void Baker::fill_stats() {
 
 BakeResult Baker::run() {
     run_passes();
+    remember_pass_cost();
     write_outputs();
     fill_margin();
     fill_stats();

@@ -74,6 +74,15 @@ PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds,
     return next;
 }
 
+int measured_first_pass(double fit, int rounds_total) {
+    const double fits = kGrowthMargin * fit;
+    if (rounds_total <= 0 || !(fits >= 1)) return 0;
+    if (rounds_total <= fits) return rounds_total;
+    // Room for the pass to 2N after it where 4 rounds fit: two passes measure
+    // how the error falls (convergence.h), which the bake reports.
+    return power_of_two_floor(int(fits >= 4 ? fits / 2 : fits));
+}
+
 void PassTimer::set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
 
 void PassTimer::add(double samples, double seconds) {
@@ -81,10 +90,14 @@ void PassTimer::add(double samples, double seconds) {
     seconds_ = seconds;
 }
 
-double PassTimer::fit(double seconds) const {
+double PassTimer::per_sample() const {
     if (!(samples_ > 0)) return 0;
-    const double a = std::min(fixed_, kMostFixed * seconds_), b = (seconds_ - a) / samples_;
-    return b > 0 ? (seconds - a) / b : 0;
+    return (seconds_ - std::min(fixed_, kMostFixed * seconds_)) / samples_;
+}
+
+double PassTimer::fit(double seconds) const {
+    const double b = per_sample();
+    return b > 0 ? (seconds - std::min(fixed_, kMostFixed * seconds_)) / b : 0;
 }
 
 double tail_weight(int net_rounds, int tail_rounds, double alpha) {

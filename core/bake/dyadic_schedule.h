@@ -65,6 +65,13 @@ struct PassAfterProbe {
 };
 PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds, int rounds_total);
 
+// A time budget's first pass where an earlier bake of the same shape measured
+// what a round costs (Scene::measured_pass_cost), `fit` rounds fitting in the
+// time left: all `rounds_total` where they fit in kGrowthMargin of it; else
+// the largest net N whose pass to 2N fits after it, or where not even 4
+// rounds fit, the largest net that fits; 0 when not even one round does.
+int measured_first_pass(double fit, int rounds_total);
+
 // The largest power of two ≤ n (n ≥ 1).
 int power_of_two_floor(int n);
 
@@ -89,6 +96,9 @@ public:
     void add(double samples, double seconds);
     // The most samples per point a pass can take in `seconds`.
     double fit(double seconds) const;
+    // Seconds per sample per point beyond the fixed part, as the last pass
+    // measured it (0 before any).
+    double per_sample() const;
 
 private:
     static constexpr double kMostFixed = 0.75;  // of the last pass: its rounds cost too

@@ -165,4 +165,20 @@ const LightSelector& Scene::light_selector(LightSelector::Kind kind, bool delta)
     return *slot;
 }
 
+std::optional<Scene::PassCost> Scene::measured_pass_cost(std::uint64_t bake_shape) const {
+    std::lock_guard<std::mutex> lock(pass_costs_mutex_);
+    const auto it = pass_costs_.find(bake_shape);
+    if (it == pass_costs_.end()) return std::nullopt;
+    return it->second;
+}
+
+void Scene::remember_pass_cost(std::uint64_t bake_shape, const PassCost& cost) const {
+    // A few shapes per scene in practice (a mesh at one or two sizes); the
+    // bound keeps a script baking thousands of shapes from growing it.
+    constexpr std::size_t kMostShapes = 256;
+    std::lock_guard<std::mutex> lock(pass_costs_mutex_);
+    if (pass_costs_.size() >= kMostShapes && !pass_costs_.count(bake_shape)) pass_costs_.clear();
+    pass_costs_[bake_shape] = cost;
+}
+
 }  // namespace omis

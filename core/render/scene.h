@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "lights/light.h"
@@ -63,6 +65,19 @@ public:
     // After commit; any thread.
     const LightSelector& light_selector(LightSelector::Kind kind, bool delta) const;
 
+    // What a pass of a bake of this scene cost, as the bake measured it, by
+    // the bake's shape (a key the baker forms from the mesh, the layout, the
+    // techniques and the threads): the next time-budgeted bake of the same
+    // shape sizes its first pass from it (bake.cpp). Artists re-bake a scene
+    // they change little; the first bake, with nothing measured, spends a
+    // one-round pass on measuring. Any thread.
+    struct PassCost {
+        double first_pass_fixed = 0;  // seconds of the first pass beyond its rounds
+        double round = 0;             // seconds of one round over every point
+    };
+    std::optional<PassCost> measured_pass_cost(std::uint64_t bake_shape) const;
+    void remember_pass_cost(std::uint64_t bake_shape, const PassCost& cost) const;
+
 private:
     void require_uncommitted_light(std::uint32_t light) const;
 
@@ -79,6 +94,8 @@ private:
     bool committed_ = false;
     mutable std::mutex selectors_mutex_;
     mutable std::unique_ptr<LightSelector> selectors_[2][3];  // [delta][kind]
+    mutable std::mutex pass_costs_mutex_;
+    mutable std::unordered_map<std::uint64_t, PassCost> pass_costs_;
 };
 
 }  // namespace omis

@@ -41,12 +41,14 @@ TEST_CASE("a time budget's first pass is one round, whatever the strategy", "[ba
 
 TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes exactly N",
           "[bake]") {
-    Scene scene;
-    std::vector<float> positions, uvs;
-    std::vector<std::uint32_t> triangles;
-    two_triangle_floor(scene, positions, triangles, uvs);
     // One round; two and a final 2; four rounds; eight.
     for (long long n : {5LL, 12LL, 20LL, 40LL}) {
+        // A scene of its own: no earlier bake has measured what a pass costs,
+        // so the first pass is the one-round probe.
+        Scene scene;
+        std::vector<float> positions, uvs;
+        std::vector<std::uint32_t> triangles;
+        two_triangle_floor(scene, positions, triangles, uvs);
         BakeSettings s;
         s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
                                  *parse_technique("uniform/area")};
@@ -72,6 +74,65 @@ TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes
             CHECK(r.value == bake(scene, whole).value);
         }
     }
+}
+
+TEST_CASE("a time budget's first pass takes the rounds an earlier bake of its shape measured "
+          "to fit", "[bake]") {
+    Scene scene;
+    std::vector<float> positions, uvs;
+    std::vector<std::uint32_t> triangles;
+    two_triangle_floor(scene, positions, triangles, uvs);
+    BakeSettings s;
+    s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
+                             *parse_technique("uniform/area")};
+    s.lighting.samples = {2, 3};
+    s.lighting.strategy = Strategy::OptimalDirect;
+    s.samples = 40;        // eight rounds
+    s.time_budget = 1000;  // all of them fit, by any measure
+    s.width = s.height = 16;
+    BakeSettings whole = s;
+    whole.time_budget = 0;
+
+    // Nothing measured yet: a one-round probe, then the passes after it.
+    const BakeResult first = bake(scene, s);
+    CHECK(first.stats.passes >= 2);
+    // The same shape again: its eight rounds fit in one pass by the first
+    // bake's measure, and that pass is the bake of all rounds at once.
+    const BakeResult again = bake(scene, s);
+    CHECK(again.stats.passes == 1);
+    CHECK(again.stats.samples == 40u * again.stats.covered);
+    CHECK(again.value == bake(scene, whole).value);
+    // Another shape (the lightmap's size) has nothing measured: a probe again.
+    BakeSettings larger = s;
+    larger.width = larger.height = 20;
+    CHECK(bake(scene, larger).stats.passes >= 2);
+    // A budget spent before the first pass: one round, measured or not.
+    BakeSettings spent = s;
+    spent.time_budget = 1e-9;
+    const BakeResult one = bake(scene, spent);
+    CHECK(one.stats.passes == 1);
+    CHECK(one.stats.samples == 5u * one.stats.covered);
+}
+
+TEST_CASE("a scene keeps the last pass cost of each bake shape, and a bounded number of them",
+          "[bake]") {
+    Scene scene;
+    CHECK_FALSE(scene.measured_pass_cost(7));
+    scene.remember_pass_cost(7, {0.01, 0.002});
+    scene.remember_pass_cost(7, {0.02, 0.003});  // the last bake's measure wins
+    REQUIRE(scene.measured_pass_cost(7));
+    CHECK(scene.measured_pass_cost(7)->first_pass_fixed == 0.02);
+    CHECK(scene.measured_pass_cost(7)->round == 0.003);
+    // Thousands of shapes (a script baking every size) do not pile up: once
+    // the store is full it starts again.
+    for (std::uint64_t shape = 100; shape < 100 + 10000; ++shape)
+        scene.remember_pass_cost(shape, {0, 1});
+    std::size_t kept = 0;
+    for (std::uint64_t shape = 100; shape < 100 + 10000; ++shape)
+        kept += bool(scene.measured_pass_cost(shape));
+    CHECK(kept > 0);
+    CHECK(kept <= 256);
+    CHECK(scene.measured_pass_cost(100 + 9999));  // the newest stays
 }
 
 TEST_CASE("a scene builds each light selector once, as LightSelector would", "[bake]") {

@@ -76,6 +76,28 @@ TEST_CASE("after an optimal strategy's probe: a first net from round 0, else the
     CHECK(after.pass.rounds == 0);
 }
 
+TEST_CASE("a measured first pass: a net with room to double, the largest net, or all rounds",
+          "[bake][schedule]") {
+    const int lots = 1 << 20;
+    // emissive_mesh's 0.05 s: ~3.2 rounds fit, 2.56 with the margin: a net of
+    // 2 in one pass (a second would not fit).
+    CHECK(measured_first_pass(3.2, lots) == 2);
+    CHECK(measured_first_pass(3.99 / kGrowthMargin, lots) == 2);
+    // From 4 rounds on, a net N with room for the pass to 2N.
+    CHECK(measured_first_pass(4 / kGrowthMargin, lots) == 2);
+    CHECK(measured_first_pass(7.9 / kGrowthMargin, lots) == 2);
+    CHECK(measured_first_pass(8 / kGrowthMargin, lots) == 4);
+    CHECK(measured_first_pass(100 / kGrowthMargin, lots) == 32);
+    // A sample budget's rounds, all, where they fit: 5 rounds are no net.
+    CHECK(measured_first_pass(10 / kGrowthMargin, 5) == 5);
+    CHECK(measured_first_pass(1e30, 12) == 12);
+    // Less than a round with the margin, nothing left, or no measure: none.
+    CHECK(measured_first_pass(0.99 / kGrowthMargin, lots) == 0);
+    CHECK(measured_first_pass(-3, lots) == 0);
+    CHECK(measured_first_pass(std::nan(""), lots) == 0);
+    CHECK(measured_first_pass(100, 0) == 0);
+}
+
 TEST_CASE("a pass's predicted cost: the first pass's fixed part plus the last pass's rate",
           "[bake][schedule]") {
     PassTimer timer;
@@ -97,6 +119,8 @@ TEST_CASE("a pass's predicted cost: the first pass's fixed part plus the last pa
     PassTimer proportional;
     proportional.add(2, 0.1);
     CHECK(proportional.fit(0.5) == Approx(10));
+    CHECK(proportional.per_sample() == Approx(0.05));
+    CHECK(PassTimer{}.per_sample() == 0);
 }
 
 TEST_CASE("a tail's weight: its rounds at α = 1, less where the error falls faster",
