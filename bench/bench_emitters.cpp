@@ -246,17 +246,6 @@ int main(int argc, char** argv) {
                                    {{0, 1, 2}, {0, 2, 3}});
                     },
                     grid, texels, rounds, fast));
-        // HQ8 EXPERIMENT: 224 emitters and a non-emissive UV sphere (the occluder) of N triangles.
-        for (auto [stacks, slices] : spheres)
-            if (wanted("occluder", 2 * slices * (stacks - 1)))
-                scenes.push_back(std::make_unique<Timed>(
-                    "occluder sphere", 2 * slices * (stacks - 1),
-                    [&](Scene& s) {
-                        add_emissive_sphere(s, 8, 16);
-                        testing::add_emissive_sphere(s, Vec3(0.6, 0.2, 0.8), 0.4, stacks, slices,
-                                                     Vec3(0, 0, 0));
-                    },
-                    grid, texels, rounds, fast));
         if (wanted("race", 16129))
             scenes.push_back(std::make_unique<Timed>("race mesh", 16129, testing::add_race_mesh,
                                                      grid, texels, rounds, fast, 2.0));

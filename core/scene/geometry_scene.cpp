@@ -1,7 +1,6 @@
 #include "scene/geometry_scene.h"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -50,49 +49,6 @@ constexpr unsigned kMeshMask = 1, kCandidateMask = 2;
 // three: such a ray is left to EmitterShapes::lights_along.
 constexpr float kNearEdge = 1e-3f;
 
-// Embree takes a mesh's triangles as quads (half the primitives, so a BVH
-// about half the size: at 100k triangles the traversal's cache misses are
-// most of a sample's cost). Quad (v0, v1, v2, v3) is the triangles
-// (v0, v1, v3) and (v2, v3, v1); Embree reports a hit on the second at
-// u = 1 - u', v = 1 - v' of its own (u', v'), so u + v > 1 there. Two
-// consecutive triangles that share an edge, traversed the other way in the
-// second (consistent winding: the two halves of a quad polygon, as Blender's
-// loop triangles come), make a quad; a triangle with no such neighbour is a
-// quad whose last corner repeats its third (the second half is degenerate
-// and never hit). Per quad the scene keeps its first triangle, and
-// kPairedQuad where the next triangle is its second half.
-constexpr std::uint32_t kPairedQuad = 1u << 31;  // triangle ids are below 2^31
-
-using Triangle = std::array<std::uint32_t, 3>;
-
-// Where b shares an edge with a, traversed the other way: a's edge
-// a[k] -> a[k+1] is b's b[m] -> b[m+1] = a[k+1] -> a[k]. False when there is
-// none, or when a corner repeats (in a triangle, or the two opposite ones).
-bool opposite_shared_edge(const Triangle& a, const Triangle& b, int& k, int& m) {
-    if (a[0] == a[1] || a[1] == a[2] || a[2] == a[0] || b[0] == b[1] || b[1] == b[2] ||
-        b[2] == b[0])
-        return false;
-    for (k = 0; k < 3; ++k)
-        for (m = 0; m < 3; ++m)
-            if (a[k] == b[(m + 1) % 3] && a[(k + 1) % 3] == b[m])
-                return a[(k + 2) % 3] != b[(m + 2) % 3];
-    return false;
-}
-
-// The quad of a and b (opposite_shared_edge's k, m): the shared edge is its
-// diagonal v1 v3; its first half (v0, v1, v3) is a turned, its second
-// (v2, v3, v1) is b turned, so both keep their winding.
-std::array<std::uint32_t, 4> quad_corners(const Triangle& a, const Triangle& b, int k, int m) {
-    return {a[(k + 2) % 3], a[k], b[(m + 2) % 3], a[(k + 1) % 3]};
-}
-
-// Is Embree's hit (u, v) on quad `entry` on its second half? Exactly on the
-// diagonal u + v = 1 either answer is the same point, and float rounding of
-// u + v moves the answer only within an ulp of it (see emitter_filter).
-bool on_second_half(std::uint32_t entry, float u, float v) {
-    return (entry & kPairedQuad) && u + v > 1.0f;
-}
-
 // An intersection context that closest_hit_and_emitters extends: the filter of
 // emissive meshes and candidates acts only where `emitters` is set.
 struct EmitterQuery {
@@ -111,9 +67,9 @@ struct EmitterQuery {
         if (on_listed) on_listed(on_listed_context, light);
     }
     // The closest hit on an emissive mesh so far (rejected, so that the
-    // traversal goes on to the lights behind it): Embree's primitive and u, v.
+    // traversal goes on to the lights behind it).
     float t = INFINITY, u = 0, v = 0;
-    std::uint32_t mesh = ~0u, primitive = 0;
+    std::uint32_t mesh = ~0u, triangle = 0;
     // Some emissive triangle was hit near its edge: a neighbour's light
     // may be crossed where single precision says it is not.
     bool near_edge = false;
@@ -142,42 +98,30 @@ void emitter_filter(const RTCFilterFunctionNArguments* args) {
         // candidate: the hit is the triangle's own).
         const float t = RTCRayN_tfar(args->ray, args->N, i);
         const float u = RTCHitN_u(args->hit, args->N, i), v = RTCHitN_v(args->hit, args->N, i);
-        // The hit's barycentrics in its own triangle are, in some order, these
-        // three (a turn of the triangle's corners; see quad_corners).
-        float w0 = 1.0f - u - v, w1 = u, w2 = v;
-        std::uint32_t triangle = primitive;
-        if (const auto* quads = static_cast<const std::uint32_t*>(args->geometryUserPtr)) {
-            const std::uint32_t entry = quads[primitive];
-            const bool second = on_second_half(entry, u, v);
-            triangle = (entry & ~kPairedQuad) + (second ? 1 : 0);
-            if (second) {  // (v2, v3, v1) at u' = 1 - u, v' = 1 - v
-                w0 = u + v - 1.0f;
-                w1 = 1.0f - u;
-                w2 = 1.0f - v;
-            }
-        }
         const GeometryScene::MeshLights& m = q->mesh_lights[geometry];
         const std::uint32_t light =
-            m.consecutive ? m.first + triangle : q->mesh_light[m.first + triangle];
+            m.consecutive ? m.first + primitive : q->mesh_light[m.first + primitive];
         if (light != ~0u) q->list(light);
-        // Near any edge of its own triangle, the quad's diagonal included. The
-        // diagonal is inside one Embree primitive now, but Embree still tests
-        // the quad as its two triangles, on the same two float corners v1, v3,
-        // and robust mode's edge tests are watertight there as between
-        // primitives: a ray single precision moves off one half near the
-        // diagonal hits the other half within float rounding of it, where
-        // that half's own weight of its third corner is below kNearEdge. And
-        // a hit within rounding of the diagonal, which on_second_half may give
-        // to either half, is near an edge of both.
-        q->near_edge = q->near_edge || std::min({w0, w1, w2}) < kNearEdge;
+        q->near_edge = q->near_edge || std::min({u, v, 1.0f - u - v}) < kNearEdge;
         if (t < q->t) {
             q->t = t;
             q->u = u;
             q->v = v;
             q->mesh = geometry;
-            q->primitive = primitive;
+            q->triangle = primitive;
         }
     }
+}
+
+// The hit Embree kept.
+RayHit hit_of(const RTCRayHit& rh) {
+    RayHit hit;
+    hit.t = rh.ray.tfar;
+    hit.mesh = rh.hit.geomID;
+    hit.triangle = rh.hit.primID;
+    hit.b1 = rh.hit.u;
+    hit.b2 = rh.hit.v;
+    return hit;
 }
 
 // Fills an Embree ray; false when the interval is empty (nothing to trace).
@@ -365,12 +309,7 @@ GeometryScene::GeometryScene(std::shared_ptr<Device> device, SceneOptions option
     if (!device_) throw std::invalid_argument("GeometryScene: device is null");
     scene_ = rtcNewScene(device_->handle());
     device_->check();
-    if (const char* e = std::getenv("OMIS_QUADS"))  // EXPERIMENT (h-quad8): removed before merge
-        options_.quads = e[0] == 'a' ? QuadMeshes::all : e[0] == 'e' ? QuadMeshes::emissive
-                       : e[0] == 'o' ? QuadMeshes::occluders : QuadMeshes::none;
-    if (const char* e = std::getenv("OMIS_COMPACT")) options_.compact = e[0] == '1';
-    rtcSetSceneFlags(scene_, options_.compact ? RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT
-                                              : RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, options_.build_quality);
     device_->check();
 }
@@ -405,39 +344,14 @@ std::uint32_t GeometryScene::add_mesh(const MeshInput& in) {
 
 void GeometryScene::attach_to_embree(const Mesh& m, std::uint32_t id,
                                      const std::string& who) {
-    // Embree keeps its own single-precision copy, as quads where it pairs
-    // triangles (kPairedQuad).
+    // Embree keeps its own single-precision copy.
     const std::size_t V = m.positions.size(), T = m.triangles.size();
-    std::vector<std::uint32_t> quads;
-    std::vector<std::array<std::uint32_t, 4>> corners;
-    if (options_.quads == QuadMeshes::all ||
-        (options_.quads == QuadMeshes::emissive && m.is_emissive()) ||
-        (options_.quads == QuadMeshes::occluders && !m.is_emissive())) {
-        for (std::uint32_t t = 0; t < T;) {
-            const Triangle& a = m.triangles[t];
-            int k, e;
-            if (t + 1 < T && opposite_shared_edge(a, m.triangles[t + 1], k, e)) {
-                corners.push_back(quad_corners(a, m.triangles[t + 1], k, e));
-                quads.push_back(t | kPairedQuad);
-                t += 2;
-            } else {
-                corners.push_back({a[0], a[1], a[2], a[2]});
-                quads.push_back(t);
-                t += 1;
-            }
-        }
-        if (quads.size() == T) quads.clear();  // no pair: plain triangles
-    }
-    const bool as_quads = !quads.empty();
-    RTCGeometry geom = rtcNewGeometry(device_->handle(), as_quads ? RTC_GEOMETRY_TYPE_QUAD
-                                                                  : RTC_GEOMETRY_TYPE_TRIANGLE);
+    RTCGeometry geom = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
     device_->check();
     auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(
         geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), V));
-    const int per = as_quads ? 4 : 3;
     auto* ib = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, as_quads ? RTC_FORMAT_UINT4 : RTC_FORMAT_UINT3,
-        per * sizeof(std::uint32_t), as_quads ? quads.size() : T));
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), T));
     if (!vb || !ib) {
         rtcReleaseGeometry(geom);
         device_->check();
@@ -448,17 +362,8 @@ void GeometryScene::attach_to_embree(const Mesh& m, std::uint32_t id,
         vb[3 * i + 1] = float(m.positions[i].y);
         vb[3 * i + 2] = float(m.positions[i].z);
     }
-    if (as_quads) {
-        for (std::size_t q = 0; q < corners.size(); ++q)
-            for (int k = 0; k < 4; ++k) ib[4 * q + k] = corners[q][k];
-    } else {
-        for (std::size_t t = 0; t < T; ++t)
-            for (int k = 0; k < 3; ++k) ib[3 * t + k] = m.triangles[t][k];
-    }
-    // The filter reads the quads' table here (a vector's buffer stays put
-    // when quads_ grows).
-    quads_.push_back(std::move(quads));
-    if (as_quads) rtcSetGeometryUserData(geom, quads_.back().data());
+    for (std::size_t t = 0; t < T; ++t)
+        for (int k = 0; k < 3; ++k) ib[3 * t + k] = m.triangles[t][k];
     rtcSetGeometryBuildQuality(geom, options_.build_quality);
     rtcSetGeometryMask(geom, kMeshMask);
     if (m.is_emissive()) rtcSetGeometryIntersectFilterFunction(geom, emitter_filter);
@@ -486,40 +391,6 @@ std::uint32_t GeometryScene::add_mesh(const std::vector<Vec3>& positions,
     in.triangles.cols = 3;
     in.emission = emission;
     return add_mesh(in);
-}
-
-RayHit GeometryScene::triangle_hit(std::uint32_t mesh, std::uint32_t primitive, float t, float u,
-                                   float v) const {
-    RayHit hit;
-    hit.t = t;
-    hit.mesh = mesh;
-    hit.triangle = primitive;
-    hit.b1 = u;
-    hit.b2 = v;
-    const std::vector<std::uint32_t>& quads = quads_[mesh];
-    if (quads.empty()) return hit;
-    const std::uint32_t entry = quads[primitive];
-    hit.triangle = entry & ~kPairedQuad;
-    if (!(entry & kPairedQuad)) return hit;  // (a0, a1, a2, a2): a's own u, v
-    const Triangle& a = meshes_[mesh].triangles[hit.triangle];
-    const Triangle& b = meshes_[mesh].triangles[hit.triangle + 1];
-    int k = 0, m = 0;
-    opposite_shared_edge(a, b, k, m);  // as attach_to_embree paired them
-    // Each corner's weight, in the triangle's own order (quad_corners).
-    double w[3];
-    if (on_second_half(entry, u, v)) {  // (v2, v3, v1) = (b[m+2], b[m], b[m+1])
-        hit.triangle += 1;
-        w[(m + 2) % 3] = double(u) + double(v) - 1.0;
-        w[m] = 1.0 - double(u);
-        w[(m + 1) % 3] = 1.0 - double(v);
-    } else {  // (v0, v1, v3) = (a[k+2], a[k], a[k+1])
-        w[(k + 2) % 3] = 1.0 - double(u) - double(v);
-        w[k] = u;
-        w[(k + 1) % 3] = v;
-    }
-    hit.b1 = w[1];
-    hit.b2 = w[2];
-    return hit;
 }
 
 void GeometryScene::commit() {
@@ -584,7 +455,7 @@ std::optional<RayHit> GeometryScene::closest_hit(const Vec3& origin, const Vec3&
     count_rays(1);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     if (embree_normal) *embree_normal = Vec3{rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z};
-    return triangle_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
+    return hit_of(rh);
 }
 
 std::optional<Hit> GeometryScene::intersect(const Vec3& origin, const Vec3& direction,
@@ -729,13 +600,17 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     // was looked for.
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
         complete = false;
-        if (!(q.t < rh.ray.tfar))
-            return triangle_hit(rh.hit.geomID, rh.hit.primID, rh.ray.tfar, rh.hit.u, rh.hit.v);
+        if (!(q.t < rh.ray.tfar)) return hit_of(rh);
     }
     complete = complete && !q.near_edge;
     if (q.mesh == ~0u) return std::nullopt;
-    // The closest emissive hit, set aside by the filter.
-    return triangle_hit(q.mesh, q.primitive, q.t, q.u, q.v);
+    RayHit hit;  // the closest emissive hit, set aside by the filter
+    hit.t = q.t;
+    hit.mesh = q.mesh;
+    hit.triangle = q.triangle;
+    hit.b1 = q.u;
+    hit.b2 = q.v;
+    return hit;
 }
 
 const Mesh& GeometryScene::mesh(std::uint32_t id) const {

@@ -123,13 +123,7 @@ struct SceneOptions {
     // Embree's HIGH quality builder (spatial splits) pays at build time for
     // faster traversal; bakes trace millions of rays per build.
     RTCBuildQuality build_quality = RTC_BUILD_QUALITY_HIGH;
-    // Which meshes Embree takes as quads (pairs of triangles that share an
-    // edge: half the primitives), and Embree's compact (smaller) leaves.
-    enum class QuadMeshes { none, emissive, occluders, all };
-    QuadMeshes quads = QuadMeshes::emissive;
-    bool compact = false;
 };
-using QuadMeshes = SceneOptions::QuadMeshes;
 
 class GeometryScene {
 public:
@@ -220,9 +214,6 @@ public:
     std::size_t num_meshes() const { return meshes_.size(); }
     const Mesh& mesh(std::uint32_t id) const;
     const std::vector<Mesh>& meshes() const { return meshes_; }
-    // How many quads Embree has of a mesh's triangles (0: it has them as
-    // triangles; SceneOptions::quads).
-    std::size_t embree_quads(std::uint32_t mesh) const { return quads_.at(mesh).size(); }
     // Every non-degenerate triangle of every emissive mesh.
     std::vector<EmissiveTriangle> emissive_triangles() const;
 
@@ -232,10 +223,6 @@ private:
     // Hands Embree its single-precision copy of a validated mesh, as geometry `id`.
     void attach_to_embree(const Mesh& mesh, std::uint32_t id, const std::string& who);
     void require_committed(const char* what) const;
-    // Embree's hit (its primitive and u, v) as the mesh's triangle and that
-    // triangle's own barycentrics.
-    RayHit triangle_hit(std::uint32_t mesh, std::uint32_t primitive, float t, float u,
-                        float v) const;
     // closest_hit, and Embree's (unnormalised) geometric normal of the hit.
     std::optional<RayHit> closest_hit(const Vec3& origin, const Vec3& direction, double tmin,
                                       double tmax, Vec3* embree_normal) const;
@@ -245,9 +232,6 @@ private:
     SceneOptions options_;
     RTCScene scene_ = nullptr;
     std::vector<Mesh> meshes_;
-    // Per mesh, its Embree quads' first triangles (kPairedQuad: and the next);
-    // empty where Embree has its triangles.
-    std::vector<std::vector<std::uint32_t>> quads_;
     std::size_t occluder_triangles_ = 0;
     // The emitter candidates' Embree geometry id (~0u: none) and light ids.
     std::uint32_t candidates_geometry_ = ~0u;
