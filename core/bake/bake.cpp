@@ -309,7 +309,8 @@ struct StreamTally {
 // between passes. Under a noise target passes grow (rounds_per_pass, 1.5×
 // that, ...), so the target is checked often early on and the per-pass cost
 // (one solve per point) stays small later. Under a time budget alone: one
-// round (measures the cost), then each pass half the time left but at most
+// round (measures the cost; or what an earlier bake's measure says fits:
+// size_first_pass), then each pass half the time left but at most
 // 4× the one before, the last the rest (plan_pass). Every pass reaches every point: a
 // time budget ends on whole passes (the first always completes; the last
 // takes the time the measured cost says is left: plan_pass), so all points
