@@ -1427,10 +1427,13 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     for (int k : active.lights)
         if (uses_table(k))
             entry.tables.push_back({k, choices_[k].lights, choices_[k].probability});
-    // Only where a table was made: selectors' techniques are cheap to find
-    // again, and an entry for every texel of a large map would spend the
+    // Without a table, only where the point has a slot of its own (a bake's
+    // texels: the slot's bytes are spent anyway): choosing the techniques
+    // again — a tree's bounds at the centre, the point's probes — was ~12 % of
+    // what a later pass repeated on the race's emissive_mesh (callgrind, 64²).
+    // In the map, an entry for every texel of a large map would spend the
     // budget on them.
-    if (entry.tables.empty()) {
+    if (entry.tables.empty() && !kept.has_slot(stream)) {
         setup.discard();  // nothing kept: not the kept tables' set-up
         return;
     }

@@ -587,6 +587,19 @@ void LightSelector::focus(Memo& memo, const Receiver& at) const {
         memo.kept_count > 0 || (!wide_.empty() && root_.importance(x, n, at.radius) > 0);
 }
 
+// A kept node's probabilities from its importances: ~5 of a texel's walks'
+// steps in a one-round later pass on the race's emissive_mesh, which through
+// remember's call cost about twice the instructions.
+__attribute__((always_inline)) inline void LightSelector::take_kept(std::uint32_t index,
+                                                                    Memo& memo,
+                                                                    Memo::Entry& e) const {
+    const KeptNode& kept = memo.kept[e.kept_index];
+    e.clusters = std::uint8_t(kept.node_and_clusters >> KeptNode::kClusterShift);
+    probabilities_from(index, kept.importance, e.p);
+    e.stamp = memo.stamp;
+    e.kept_stamp = 0;  // p is made
+}
+
 // Inline in sample() and pmf(): every step of a walk comes here, and most
 // find their entry.
 __attribute__((always_inline)) inline const double* LightSelector::child_probabilities(
@@ -600,7 +613,8 @@ __attribute__((always_inline)) inline const double* LightSelector::child_probabi
     Memo::Entry& e = memo->slots[slot_of(index)];
     if (e.stamp != memo->stamp || e.node != index) {
         if (memo->kept_capacity > 0) {
-            remember(index, at, *memo, e);
+            if (e.kept_stamp == memo->stamp && e.node == index) take_kept(index, *memo, e);
+            else remember(index, at, *memo, e);
         } else {
             e.node = index;
             e.stamp = memo->stamp;
@@ -616,10 +630,9 @@ __attribute__((noinline)) void LightSelector::remember(std::uint32_t index, cons
                                                        Memo& memo, Memo::Entry& e) const {
     static_assert(sizeof(KeptNode::importance) == sizeof(float) * kWidth, "a node's children");
     constexpr std::uint32_t node_mask = (1u << KeptNode::kClusterShift) - 1;
+    // (A kept node that focus placed at its slot is take_kept's.)
     const KeptNode* found = nullptr;
-    if (e.kept_stamp == memo.stamp && e.node == index) {
-        found = &memo.kept[e.kept_index];  // placed there by focus
-    } else if (e.kept_stamp == memo.stamp || e.stamp == memo.stamp) {
+    if (e.kept_stamp == memo.stamp || e.stamp == memo.stamp) {
         // Another node of this focus took the slot: a kept node may have
         // lost it. (Otherwise focus would have placed a kept `index` here.)
         for (std::size_t j = 0; j < memo.kept_count && !found; ++j)
@@ -643,7 +656,9 @@ __attribute__((noinline)) void LightSelector::remember(std::uint32_t index, cons
     e.kept_stamp = 0;  // p is made
 }
 
-bool LightSelector::root_reaches(const Receiver& at, Memo* memo) const {
+// Inline in sample() and pmf(), as each of their calls starts here.
+__attribute__((always_inline)) inline bool LightSelector::root_reaches(const Receiver& at,
+                                                                    Memo* memo) const {
     if (wide_.empty()) return false;
     if (!memo) return root_.importance(at.x, at.n, at.radius) > 0;
     focus(*memo, at);

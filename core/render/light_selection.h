@@ -266,6 +266,9 @@ private:
     // Fills the memo's entry for `node` at `at`: from the kept nodes where
     // they hold it, else evaluated (and kept where a slot is free).
     void remember(std::uint32_t node, const Receiver& at, Memo& memo, Memo::Entry& e) const;
+    // remember's usual case in a later pass, inline: focus placed the kept
+    // node at its slot.
+    void take_kept(std::uint32_t node, Memo& memo, Memo::Entry& e) const;
     // The same through a memo focused on `at` (root_reaches does so).
     const double* child_probabilities(std::uint32_t node, const Receiver& at, Memo* memo,
                                       double scratch[kWidth], std::uint32_t& clusters) const;

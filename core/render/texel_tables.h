@@ -6,9 +6,10 @@
 // pass instead of recomputed: a spread light's weights (SPEC §3's spread-
 // weighted irradiance at up to five probes) cost more than a one-round pass's
 // samples. A table kept is the one recomputation would give, bit for bit.
-// Texels whose light techniques all draw from selectors keep nothing (cheap
-// to work out again), nor do bakes whose tables need no irradiance (`uniform`,
-// `power`: direct_lighting.cpp, cheap_tables_).
+// Texels whose light techniques all draw from selectors keep only which
+// techniques take part, and only in a slot of their own (index_points); bakes
+// whose tables need no irradiance (`uniform`, `power`: direct_lighting.cpp,
+// cheap_tables_) keep nothing.
 //
 // Shared by the threads of one lighting job: a texel is shaded by one thread
 // at a time, and entries are only added, never changed or removed. Memory is
@@ -50,6 +51,9 @@ public:
     // array stays within a quarter of the byte budget (else the map, which
     // holds only the points that keep something). Call before any keep.
     void index_points(std::size_t count);
+    // Whether `texel` has a slot of its own (index_points): an entry without
+    // tables costs no bytes there.
+    bool has_slot(std::uint64_t texel) const { return texel < indexed_count_; }
     // The entry kept for `texel`, or null.
     const Entry* find(std::uint64_t texel) const;
     // Keeps `entry` for `texel` unless one is kept already or the budget is

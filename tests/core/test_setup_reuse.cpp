@@ -185,6 +185,39 @@ TEST_CASE("draw counts kept between passes: a later pass shades as one that coun
         }
 }
 
+TEST_CASE("techniques kept between passes where only selectors draw: a later pass shades as "
+          "one that chooses them again", "[texel_tables]") {
+    // A bake's texels have a slot each in the texel tables (index_points);
+    // where no technique draws from a table, the slot keeps which techniques
+    // take part (the tree's reach over the texel) instead of nothing. A later
+    // pass from it must give the bits of one that chooses them again, at lit
+    // and unlit texels (unlit: the tree drops out, or with it alone nothing
+    // takes part), and with shadowed texels' draws (shadowed_draws).
+    Scene scene;
+    add_scene(scene);
+    const std::vector<SquareFootprint> texels = {
+        {Vec3(0, 0, 0), 0.02}, {Vec3(-2.9, 2.9, 0), 0.02}, {Vec3(0.5, 0.4, 0), 0.05},
+        {Vec3(1.3, 1.3, 0), 0.08}, {Vec3(-2.9, -2.9, 0), 0.02}, {Vec3(-0.4, -0.3, 0), 0.02}};
+    for (bool with_bsdf : {false, true})
+        for (int shadowed_draws : {1, 4}) {
+            DirectLightingSettings s = light_and_bsdf("tree/solid-angle", 1, with_bsdf, 17);
+            s.shadowed_draws = shadowed_draws;
+            LightingContext keeping(scene, s), choosing(scene, s);
+            keeping.texel_tables.index_points(texels.size());
+            keeping.keep_shadow_verdicts(texels.size());
+            choosing.keep_shadow_verdicts(texels.size());
+            PointLighting kept(keeping), chosen(choosing);
+            check_passes_alike(kept, chosen, texels,
+                               std::string(with_bsdf ? "tree + bsdf" : "tree") + ", " +
+                                   std::to_string(shadowed_draws) + " draws shadowed",
+                               [](std::size_t) {});
+            // Every texel kept its techniques in its slot; without slots
+            // (the map) nothing is kept where no table was made.
+            CHECK(keeping.texel_tables.size() == texels.size());
+            CHECK(choosing.texel_tables.size() == 0);
+        }
+}
+
 TEST_CASE("region radii kept between passes: a later pass shades as one that places the "
           "corners again", "[texel_tables]") {
     // A bake keeps each texel's region radius (LightingContext::
