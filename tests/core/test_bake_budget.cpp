@@ -14,6 +14,24 @@ using namespace omis;
 
 using testing::two_triangle_floor;
 
+namespace {
+
+// Two light techniques (a round: 5 samples) and the optimal strategy over a
+// 16² lightmap: `samples` per texel under `time_budget`.
+BakeSettings optimal_budget(long long samples, double time_budget) {
+    BakeSettings s;
+    s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
+                             *parse_technique("uniform/area")};
+    s.lighting.samples = {2, 3};
+    s.lighting.strategy = Strategy::OptimalDirect;
+    s.samples = samples;
+    s.time_budget = time_budget;
+    s.width = s.height = 16;
+    return s;
+}
+
+}  // namespace
+
 TEST_CASE("a time budget's first pass is one round, whatever the strategy", "[bake]") {
     Scene scene;
     std::vector<float> positions, uvs;
@@ -49,14 +67,7 @@ TEST_CASE("an optimal strategy's probe pass is replaced: samples = N still takes
         std::vector<float> positions, uvs;
         std::vector<std::uint32_t> triangles;
         two_triangle_floor(scene, positions, triangles, uvs);
-        BakeSettings s;
-        s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
-                                 *parse_technique("uniform/area")};
-        s.lighting.samples = {2, 3};
-        s.lighting.strategy = Strategy::OptimalDirect;
-        s.samples = n;
-        s.time_budget = 1000;  // passes (a probe first), never reached
-        s.width = s.height = 16;
+        const BakeSettings s = optimal_budget(n, 1000);  // passes (a probe first), never reached
         const BakeResult r = bake(scene, s);
         INFO("samples " << n);
         CHECK(r.stats.status == BakeStatus::Complete);
@@ -82,14 +93,7 @@ TEST_CASE("a time budget's first pass takes the rounds an earlier bake of its sh
     std::vector<float> positions, uvs;
     std::vector<std::uint32_t> triangles;
     two_triangle_floor(scene, positions, triangles, uvs);
-    BakeSettings s;
-    s.lighting.techniques = {*parse_technique("uniform/solid-angle"),
-                             *parse_technique("uniform/area")};
-    s.lighting.samples = {2, 3};
-    s.lighting.strategy = Strategy::OptimalDirect;
-    s.samples = 40;        // eight rounds
-    s.time_budget = 1000;  // all of them fit, by any measure
-    s.width = s.height = 16;
+    const BakeSettings s = optimal_budget(40, 1000);  // eight rounds; all fit, by any measure
     BakeSettings whole = s;
     whole.time_budget = 0;
 
