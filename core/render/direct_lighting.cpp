@@ -1131,7 +1131,16 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     }
     for (std::uint32_t l : *along) {
         const Light& light = p_.scene.lights()[l];
-        const auto e = emitted_radiance(light, x, w);
+        std::optional<Emitted> e;
+        if (light.type == LightType::Triangle) {
+            // Hidden first: the triangles behind the blocker (a closed mesh's
+            // far side, about one a sample) need no radiance.
+            const auto hit = light.triangle.intersect(x, w);
+            if (!hit || hidden(light, hit->t)) continue;
+            e = triangle_emitted(light, w, hit->t);
+        } else {
+            e = emitted_radiance(light, x, w);
+        }
         if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;
         (light.visible_to_bsdf ? f.main : f.hidden) += e->radiance;
     }
