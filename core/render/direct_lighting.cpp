@@ -546,6 +546,14 @@ struct PointLighting::Impl {
     // bound) their records stay in cache: the look-ahead's bookkeeping, ~140
     // instructions a sample, would buy nothing.
     const bool draw_next_ahead_ = p_.scene.lights().size() > kMaxTinyShapeTable;
+    // p_.selector of each technique's selection (set after p_): a sample asks
+    // twice (its draw, its density), and the context's switch cost ~35
+    // instructions each time.
+    const std::vector<const LightSelector*> technique_selectors_ = [this] {
+        std::vector<const LightSelector*> s;
+        for (const Technique& t : p_.settings.techniques) s.push_back(p_.selector(t.selection));
+        return s;
+    }();
     // integrand_to_blocker applies (set after p_). Among emissive triangles:
     // with analytic lights alone, integrand() often needs only an occlusion
     // ray, cheaper than a closest hit.
@@ -931,7 +939,7 @@ void PointLighting::Impl::draw_selector(int k, const ScrambledSobol& sequence,
     d.k = k;
     d.sequence = &sequence;
     d.index = index;
-    d.selector = p_.selector(p_.settings.techniques[k].selection);
+    d.selector = technique_selectors_[k];
     if (footprint) {
         double fu, fv;
         sequence.get_2d(index, 0, fu, fv);
@@ -1189,7 +1197,7 @@ bool PointLighting::Impl::light_occluded(std::uint32_t l, const Vec3& x, const V
 double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
-    if (const LightSelector* s = p_.selector(t.selection)) {
+    if (const LightSelector* s = technique_selectors_[k]) {
         // Only lights along w have a density there. Their pmf records are
         // read while their shapes' densities are computed.
         for (std::uint32_t l : lights_along(x, w)) s->prefetch(l);
