@@ -440,10 +440,12 @@ struct PointLighting::Impl {
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
-    // The shape pdf of each light in lights_along(x, w) for `sampler`: kept
-    // for the direction, as techniques that share a sampler (tree/… and
-    // power/…) ask for the same values.
-    const std::vector<double>& shape_pdfs_along(ShapeSampler sampler, const Vec3& x,
+    // The shape pdf of each light in `along` = lights_along(x, w) (the
+    // caller's, got once) for `sampler`: kept for the direction, as
+    // techniques that share a sampler (tree/… and power/…) ask for the same
+    // values.
+    const std::vector<double>& shape_pdfs_along(const std::vector<std::uint32_t>& along,
+                                                ShapeSampler sampler, const Vec3& x,
                                                 const Vec3& n, const Vec3& w);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t key, const std::vector<int>& active,
@@ -974,10 +976,9 @@ const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& 
     return a.lights;
 }
 
-const std::vector<double>& PointLighting::Impl::shape_pdfs_along(ShapeSampler sampler,
-                                                                 const Vec3& x, const Vec3& n,
-                                                                 const Vec3& w) {
-    const std::vector<std::uint32_t>& along = lights_along(x, w);
+const std::vector<double>& PointLighting::Impl::shape_pdfs_along(
+    const std::vector<std::uint32_t>& along, ShapeSampler sampler, const Vec3& x, const Vec3& n,
+    const Vec3& w) {
     ShapePdfs& c = shape_pdfs_;
     if (c.along == along_serial_ && c.sampler == sampler && c.n.x == n.x && c.n.y == n.y &&
         c.n.z == n.z)
@@ -1200,10 +1201,10 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
     if (const LightSelector* s = technique_selectors_[k]) {
         // Only lights along w have a density there. Their pmf records are
         // read while their shapes' densities are computed.
-        for (std::uint32_t l : lights_along(x, w)) s->prefetch(l);
+        const std::vector<std::uint32_t>& along = lights_along(x, w);
+        for (std::uint32_t l : along) s->prefetch(l);
         double pdf = 0;
-        const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
-        const std::vector<std::uint32_t>& along = along_.lights;
+        const std::vector<double>& shape = shape_pdfs_along(along, t.sampler, x, n, w);
         LightSelector::Memo* memo;
         const LightSelector::Receiver at = receiver_at(x, n, memo);
         for (std::size_t i = 0; i < along.size(); ++i) {
