@@ -469,7 +469,8 @@ F4 max4(F4 a, F4 b) { return a > b ? a : b; }  // b where a is NaN
 F4 min4(F4 a, F4 b) { return a < b ? a : b; }
 // float(x − double(c[i])) in each lane: the difference in double, then rounded.
 F4 offset4(double x, const float* c) {
-    return __builtin_convertvector(D4{} + x - __builtin_convertvector(load(c), D4), F4);
+    const D4 xs = {x, x, x, x};  // not D4{} + x, which turns x = −0 into +0
+    return __builtin_convertvector(xs - __builtin_convertvector(load(c), D4), F4);
 }
 // Bit i set where lane i of the comparison result `mask` holds.
 template <class Mask>
