@@ -414,6 +414,10 @@ Light make_world_light(const Vec3& radiance) {
     return l;
 }
 
+Emitted triangle_emitted(const Light& l, const Vec3& w, double distance) {
+    return Emitted{planar_radiance(l, w), distance};
+}
+
 std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec3& w) {
     switch (l.type) {
         case LightType::Rect: {
@@ -429,7 +433,7 @@ std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec
         case LightType::Triangle: {
             const auto hit = l.triangle.intersect(x, w);
             if (!hit) return std::nullopt;
-            return Emitted{planar_radiance(l, w), hit->t};
+            return triangle_emitted(l, w, hit->t);
         }
         case LightType::Point:
         case LightType::Spot: {

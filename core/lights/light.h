@@ -107,6 +107,10 @@ struct Emitted {
     double distance = 0;
 };
 std::optional<Emitted> emitted_radiance(const Light& light, const Vec3& x, const Vec3& w);
+// The same for a triangle light whose shape w meets at `distance` (its
+// intersect's t): a caller that first tests the hit (against a blocker) forms
+// the radiance of the triangles it keeps only.
+Emitted triangle_emitted(const Light& light, const Vec3& w, double distance);
 
 // Irradiance at (x, n) from a delta light (cosine included), with the unit
 // direction and distance for its shadow ray; empty when it cannot reach x.

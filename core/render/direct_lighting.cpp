@@ -440,10 +440,12 @@ struct PointLighting::Impl {
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
-    // The shape pdf of each light in lights_along(x, w) for `sampler`: kept
-    // for the direction, as techniques that share a sampler (tree/… and
-    // power/…) ask for the same values.
-    const std::vector<double>& shape_pdfs_along(ShapeSampler sampler, const Vec3& x,
+    // The shape pdf of each light in `along` = lights_along(x, w) (the
+    // caller's, got once) for `sampler`: kept for the direction, as
+    // techniques that share a sampler (tree/… and power/…) ask for the same
+    // values.
+    const std::vector<double>& shape_pdfs_along(const std::vector<std::uint32_t>& along,
+                                                ShapeSampler sampler, const Vec3& x,
                                                 const Vec3& n, const Vec3& w);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t key, const std::vector<int>& active,
@@ -546,6 +548,14 @@ struct PointLighting::Impl {
     // bound) their records stay in cache: the look-ahead's bookkeeping, ~140
     // instructions a sample, would buy nothing.
     const bool draw_next_ahead_ = p_.scene.lights().size() > kMaxTinyShapeTable;
+    // p_.selector of each technique's selection (set after p_): a sample asks
+    // twice (its draw, its density), and the context's switch cost ~35
+    // instructions each time.
+    const std::vector<const LightSelector*> technique_selectors_ = [this] {
+        std::vector<const LightSelector*> s;
+        for (const Technique& t : p_.settings.techniques) s.push_back(p_.selector(t.selection));
+        return s;
+    }();
     // integrand_to_blocker applies (set after p_). Among emissive triangles:
     // with analytic lights alone, integrand() often needs only an occlusion
     // ray, cheaper than a closest hit.
@@ -931,7 +941,7 @@ void PointLighting::Impl::draw_selector(int k, const ScrambledSobol& sequence,
     d.k = k;
     d.sequence = &sequence;
     d.index = index;
-    d.selector = p_.selector(p_.settings.techniques[k].selection);
+    d.selector = technique_selectors_[k];
     if (footprint) {
         double fu, fv;
         sequence.get_2d(index, 0, fu, fv);
@@ -966,10 +976,9 @@ const std::vector<std::uint32_t>& PointLighting::Impl::lights_along(const Vec3& 
     return a.lights;
 }
 
-const std::vector<double>& PointLighting::Impl::shape_pdfs_along(ShapeSampler sampler,
-                                                                 const Vec3& x, const Vec3& n,
-                                                                 const Vec3& w) {
-    const std::vector<std::uint32_t>& along = lights_along(x, w);
+const std::vector<double>& PointLighting::Impl::shape_pdfs_along(
+    const std::vector<std::uint32_t>& along, ShapeSampler sampler, const Vec3& x, const Vec3& n,
+    const Vec3& w) {
     ShapePdfs& c = shape_pdfs_;
     if (c.along == along_serial_ && c.sampler == sampler && c.n.x == n.x && c.n.y == n.y &&
         c.n.z == n.z)
@@ -1131,7 +1140,16 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     }
     for (std::uint32_t l : *along) {
         const Light& light = p_.scene.lights()[l];
-        const auto e = emitted_radiance(light, x, w);
+        std::optional<Emitted> e;
+        if (light.type == LightType::Triangle) {
+            // Hidden first: the triangles behind the blocker (a closed mesh's
+            // far side, about one a sample) need no radiance.
+            const auto hit = light.triangle.intersect(x, w);
+            if (!hit || hidden(light, hit->t)) continue;
+            e = triangle_emitted(light, w, hit->t);
+        } else {
+            e = emitted_radiance(light, x, w);
+        }
         if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;
         (light.visible_to_bsdf ? f.main : f.hidden) += e->radiance;
     }
@@ -1180,13 +1198,13 @@ bool PointLighting::Impl::light_occluded(std::uint32_t l, const Vec3& x, const V
 double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w) {
     const Technique& t = p_.settings.techniques[k];
     if (t.bsdf) return std::max(0.0, dot(n, w)) * kInvPi;
-    if (const LightSelector* s = p_.selector(t.selection)) {
+    if (const LightSelector* s = technique_selectors_[k]) {
         // Only lights along w have a density there. Their pmf records are
         // read while their shapes' densities are computed.
-        for (std::uint32_t l : lights_along(x, w)) s->prefetch(l);
+        const std::vector<std::uint32_t>& along = lights_along(x, w);
+        for (std::uint32_t l : along) s->prefetch(l);
         double pdf = 0;
-        const std::vector<double>& shape = shape_pdfs_along(t.sampler, x, n, w);
-        const std::vector<std::uint32_t>& along = along_.lights;
+        const std::vector<double>& shape = shape_pdfs_along(along, t.sampler, x, n, w);
         LightSelector::Memo* memo;
         const LightSelector::Receiver at = receiver_at(x, n, memo);
         for (std::size_t i = 0; i < along.size(); ++i) {

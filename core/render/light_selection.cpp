@@ -449,6 +449,7 @@ namespace {
 
 // Four floats, with GCC's vector arithmetic (SSE on x86-64).
 typedef float F4 __attribute__((vector_size(16)));
+typedef double D4 __attribute__((vector_size(32)));  // four doubles (two SSE registers)
 
 F4 load(const float* p) {
     F4 v;
@@ -466,6 +467,24 @@ F4 sqrt4(F4 v) {
 }
 F4 max4(F4 a, F4 b) { return a > b ? a : b; }  // b where a is NaN
 F4 min4(F4 a, F4 b) { return a < b ? a : b; }
+// float(x − double(c[i])) in each lane: the difference in double, then rounded.
+F4 offset4(double x, const float* c) {
+    const D4 xs = {x, x, x, x};  // not D4{} + x, which turns x = −0 into +0
+    return __builtin_convertvector(xs - __builtin_convertvector(load(c), D4), F4);
+}
+// Bit i set where lane i of the comparison result `mask` holds.
+template <class Mask>
+std::uint32_t bits_of(Mask mask) {
+#if defined(__SSE__)
+    F4 m;
+    std::memcpy(&m, &mask, sizeof m);
+    return std::uint32_t(_mm_movemask_ps(m));
+#else
+    std::uint32_t bits = 0;
+    for (int i = 0; i < 4; ++i) bits |= mask[i] ? 1u << i : 0u;
+    return bits;
+#endif
+}
 
 }  // namespace
 
@@ -481,12 +500,7 @@ std::uint32_t LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, 
              r2 = r * r;
     // x − centre in double, then rounded: x itself in float could be off by
     // more than a small light's radius far from the origin.
-    F4 dx, dy, dz;
-    for (int i = 0; i < kWidth; ++i) {
-        dx[i] = float(x.x - double(cx[i]));
-        dy[i] = float(x.y - double(cy[i]));
-        dz[i] = float(x.z - double(cz[i]));
-    }
+    const F4 dx = offset4(x.x, cx), dy = offset4(x.y, cy), dz = offset4(x.z, cz);
     const F4 dist2 = dx * dx + dy * dy + dz * dz;
     const F4 inv_dist = 1.0f / sqrt4(dist2);
     const F4 wx = dx * inv_dist, wy = dy * inv_dist, wz = dz * inv_dist;
@@ -512,9 +526,7 @@ std::uint32_t LightSelector::WideNode::importance(const Vec3& x, const Vec3& n, 
     std::memcpy(out, &value, sizeof value);
     const auto cluster = r2 < float(kClusterSine * kClusterSine) * dist2 &&
                          cos_o >= float(kClusterCone) && power4 > 0.0f;
-    std::uint32_t clusters = 0;
-    for (int i = 0; i < kWidth; ++i) clusters |= cluster[i] ? 1u << i : 0u;
-    return clusters;
+    return bits_of(cluster);
 }
 
 std::uint32_t LightSelector::child_importance(std::uint32_t index, const Receiver& at,

@@ -5,7 +5,7 @@
 namespace omis {
 namespace {
 
-std::uint32_t reverse_bits(std::uint32_t x) {
+constexpr std::uint32_t reverse_bits(std::uint32_t x) {
     x = __builtin_bswap32(x);  // the bytes; then the bits within them
     x = ((x & 0x0f0f0f0fu) << 4) | ((x & 0xf0f0f0f0u) >> 4);
     x = ((x & 0x33333333u) << 2) | ((x & 0xccccccccu) >> 2);
@@ -40,8 +40,10 @@ double to_unit(std::uint32_t x) { return x * 0x1.0p-32; }
 //   m_i = m_{i−s} ⊕ 2^s m_{i−s} ⊕ ⊕_{k=1}^{s−1} 2^k a_k m_{i−k}.
 struct SobolTables {
     std::uint32_t byte[4][256] = {};
+    // reversed: each entry bit-reversed, so the table gives reverse_bits of the
+    // dimension (reversal is linear over XOR), which owen_scramble starts with.
     constexpr SobolTables(int s, std::uint32_t a, std::uint32_t m0, std::uint32_t m1,
-                          std::uint32_t m2) {
+                          std::uint32_t m2, bool reversed = false) {
         std::uint32_t m[32] = {m0, m1, m2};
         for (int i = s; i < 32; ++i) {
             std::uint32_t next = m[i - s] ^ (m[i - s] << s);
@@ -56,7 +58,7 @@ struct SobolTables {
                 std::uint32_t r = 0;
                 for (int i = 0; i < 8; ++i)
                     if (x >> i & 1) r ^= v[8 * b + i];
-                byte[b][x] = r;
+                byte[b][x] = reversed ? reverse_bits(r) : r;
             }
     }
     constexpr std::uint32_t operator()(std::uint32_t i) const {
@@ -68,6 +70,19 @@ struct SobolTables {
 constexpr SobolTables kDim1(1, 0, 1, 0, 0);
 constexpr SobolTables kDim2(2, 1, 1, 3, 0);
 constexpr SobolTables kDim3(3, 1, 1, 3, 1);
+constexpr SobolTables kDim1Reversed(1, 0, 1, 0, 0, true);
+constexpr SobolTables kDim2Reversed(2, 1, 1, 3, 0, true);
+constexpr SobolTables kDim3Reversed(3, 1, 1, 3, 1, true);
+
+// owen_scramble, inline in the draws (a sample takes ~8 of them).
+inline std::uint32_t scramble(std::uint32_t x, std::uint32_t seed) {
+    return reverse_bits(laine_karras(reverse_bits(x), seed));
+}
+
+// owen_scramble(x, seed) given reverse_bits(x).
+inline std::uint32_t scramble_reversed(std::uint32_t reversed_x, std::uint32_t seed) {
+    return reverse_bits(laine_karras(reversed_x, seed));
+}
 
 // owen_scramble(sobol_dim0(i), seed): the reversals cancel.
 std::uint32_t scrambled_dim0(std::uint32_t i, std::uint32_t seed) {
@@ -82,9 +97,7 @@ std::uint32_t sobol_dim1(std::uint32_t index) { return kDim1(index); }
 std::uint32_t sobol_dim2(std::uint32_t index) { return kDim2(index); }
 std::uint32_t sobol_dim3(std::uint32_t index) { return kDim3(index); }
 
-std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
-    return reverse_bits(laine_karras(reverse_bits(x), seed));
-}
+std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) { return scramble(x, seed); }
 
 ScrambledSobol::ScrambledSobol(std::uint64_t seed) : seed_(seed) {}
 
@@ -100,23 +113,23 @@ std::uint32_t ScrambledSobol::first_seed(std::uint32_t group, std::uint32_t salt
 double ScrambledSobol::get_1d(std::uint32_t index, std::uint32_t group) const {
     // Shuffling the index by a nested scramble keeps aligned power-of-two
     // blocks together, so prefixes stay stratified.
-    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    const std::uint32_t i = scramble(index, seed(group, 0));
     return to_unit(scrambled_dim0(i, seed(group, 1)));
 }
 
 void ScrambledSobol::get_2d(std::uint32_t index, std::uint32_t group, double& u,
                             double& v) const {
-    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    const std::uint32_t i = scramble(index, seed(group, 0));
     u = to_unit(scrambled_dim0(i, seed(group, 1)));
-    v = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
+    v = to_unit(scramble_reversed(kDim1Reversed(i), seed(group, 2)));
 }
 
 void ScrambledSobol::get_4d(std::uint32_t index, std::uint32_t group, double out[4]) const {
-    const std::uint32_t i = owen_scramble(index, seed(group, 0));
+    const std::uint32_t i = scramble(index, seed(group, 0));
     out[0] = to_unit(scrambled_dim0(i, seed(group, 1)));
-    out[1] = to_unit(owen_scramble(sobol_dim1(i), seed(group, 2)));
-    out[2] = to_unit(owen_scramble(sobol_dim2(i), seed(group, 3)));
-    out[3] = to_unit(owen_scramble(sobol_dim3(i), seed(group, 4)));
+    out[1] = to_unit(scramble_reversed(kDim1Reversed(i), seed(group, 2)));
+    out[2] = to_unit(scramble_reversed(kDim2Reversed(i), seed(group, 3)));
+    out[3] = to_unit(scramble_reversed(kDim3Reversed(i), seed(group, 4)));
 }
 
 }  // namespace omis

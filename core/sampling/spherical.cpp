@@ -307,11 +307,6 @@ DirSample SphericalTriangle::sample(double u1, double u2) const {
     return out;
 }
 
-Vec3 SphericalTriangle::corner_direction(int i, int j) const {
-    if (j == 0) return dir_p1_;
-    return i == 0 ? dir_p0_ : normalize(to_p0_ + edge02_);
-}
-
 bool SphericalTriangle::hit(const Vec3& w, double& b1, double& b2, double& t) const {
     const Vec3 n = cross(edge01_, edge02_);
     const double den = dot(w, n);

@@ -85,8 +85,12 @@ public:
     double solid_angle() const { return omega_; }
     DirSample sample(double u1, double u2) const;
     // sample(i, j).dir for i, j ∈ {0, 1}, in closed form: p̂1 where j = 0
-    // (the second step starts at p1), p̂0 at (0, 1), p̂2 at (1, 1).
-    Vec3 corner_direction(int i, int j) const;
+    // (the second step starts at p1), p̂0 at (0, 1), p̂2 at (1, 1). Inline:
+    // the cosine warp asks for all four at every shape it prepares.
+    Vec3 corner_direction(int i, int j) const {
+        if (j == 0) return dir_p1_;
+        return i == 0 ? dir_p0_ : normalize(to_p0_ + edge02_);
+    }
     // Solid angle: 1/Ω if w hits the triangle, else 0.
     double pdf(const Vec3& w) const;
     Point2 invert(const Vec3& w) const;
