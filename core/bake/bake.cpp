@@ -885,7 +885,12 @@ void Baker::size_first_pass() {
 void Baker::remember_pass_cost() const {
     const double round = timer_.per_sample() * budget_.per_round;
     if (status_ == BakeStatus::Cancelled || first_pass_fixed_ < 0 || !(round > 0)) return;
-    scene_.remember_pass_cost(bake_shape(settings_, layout_), {first_pass_fixed_, round});
+    const std::uint64_t shape = bake_shape(settings_, layout_);
+    Scene::PassCost earlier;
+    if (const auto known = scene_.measured_pass_cost(shape)) earlier = *known;
+    const BlendedRoundCost blend =
+        blend_round_cost(earlier.round, earlier.rounds, round, last_pass_rounds_);
+    scene_.remember_pass_cost(shape, {first_pass_fixed_, blend.seconds, blend.rounds});
 }
 
 void Baker::run_passes() {

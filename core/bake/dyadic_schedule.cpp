@@ -83,6 +83,13 @@ int measured_first_pass(double fit, int rounds_total) {
     return power_of_two_floor(int(fits >= 4 ? fits / 2 : fits));
 }
 
+BlendedRoundCost blend_round_cost(double earlier, double earlier_rounds, double now,
+                                  double rounds) {
+    const double w = earlier > 0 && earlier_rounds > 0 ? 0.5 * earlier_rounds : 0.0;
+    if (!(rounds > 0)) return {earlier, w};
+    return {(now * rounds + earlier * w) / (rounds + w), rounds + w};
+}
+
 void PassTimer::set_fixed(double seconds) { fixed_ = std::max(0.0, seconds); }
 
 void PassTimer::add(double samples, double seconds) {

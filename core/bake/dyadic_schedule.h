@@ -72,6 +72,17 @@ PassAfterProbe pass_after_probe(int probe_rounds, double fit, int min_rounds, in
 // rounds fit, the largest net that fits; 0 when not even one round does.
 int measured_first_pass(double fit, int rounds_total);
 
+// What a round costs, from an earlier measure over `earlier_rounds` rounds and
+// this bake's over `rounds`: their mean weighted by rounds, the earlier one's
+// halved (the machine's load moves between bakes). A one-round pass carries
+// its cold start (emissive_mesh 128²: ~19 ms against ~15 ms a round in a
+// two-round pass), so one such bake alone does not undo a longer measure.
+// Returns the cost and its weight in rounds.
+struct BlendedRoundCost {
+    double seconds = 0, rounds = 0;
+};
+BlendedRoundCost blend_round_cost(double earlier, double earlier_rounds, double now, double rounds);
+
 // The largest power of two ≤ n (n ≥ 1).
 int power_of_two_floor(int n);
 

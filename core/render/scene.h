@@ -74,6 +74,7 @@ public:
     struct PassCost {
         double first_pass_fixed = 0;  // seconds of the first pass beyond its rounds
         double round = 0;             // seconds of one round over every point
+        double rounds = 0;            // how many rounds measured `round`
     };
     std::optional<PassCost> measured_pass_cost(std::uint64_t bake_shape) const;
     void remember_pass_cost(std::uint64_t bake_shape, const PassCost& cost) const;

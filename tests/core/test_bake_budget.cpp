@@ -122,15 +122,15 @@ TEST_CASE("a scene keeps the last pass cost of each bake shape, and a bounded nu
           "[bake]") {
     Scene scene;
     CHECK_FALSE(scene.measured_pass_cost(7));
-    scene.remember_pass_cost(7, {0.01, 0.002});
-    scene.remember_pass_cost(7, {0.02, 0.003});  // the last bake's measure wins
+    scene.remember_pass_cost(7, {0.01, 0.002, 4});
+    scene.remember_pass_cost(7, {0.02, 0.003, 1});  // the last bake's measure wins
     REQUIRE(scene.measured_pass_cost(7));
     CHECK(scene.measured_pass_cost(7)->first_pass_fixed == 0.02);
     CHECK(scene.measured_pass_cost(7)->round == 0.003);
     // Thousands of shapes (a script baking every size) do not pile up: once
     // the store is full it starts again.
     for (std::uint64_t shape = 100; shape < 100 + 10000; ++shape)
-        scene.remember_pass_cost(shape, {0, 1});
+        scene.remember_pass_cost(shape, {0, 1, 1});
     std::size_t kept = 0;
     for (std::uint64_t shape = 100; shape < 100 + 10000; ++shape)
         kept += bool(scene.measured_pass_cost(shape));

@@ -98,6 +98,29 @@ TEST_CASE("a measured first pass: a net with room to double, the largest net, or
     CHECK(measured_first_pass(100, 0) == 0);
 }
 
+TEST_CASE("a round's cost: measures weighted by their rounds, earlier bakes' halved",
+          "[bake][schedule]") {
+    // Nothing earlier: this bake's measure.
+    BlendedRoundCost b = blend_round_cost(0, 0, 0.019, 1);
+    CHECK(b.seconds == Approx(0.019));
+    CHECK(b.rounds == Approx(1));
+    // A long bake's 32-round pass at 12 ms, then a one-round bake at 19 ms:
+    // (19·1 + 12·16)/17.
+    b = blend_round_cost(0.012, 32, 0.019, 1);
+    CHECK(b.seconds == Approx((0.019 + 0.012 * 16) / 17));
+    CHECK(b.rounds == Approx(17));
+    // Bake after bake of one round, the measure moves to theirs.
+    for (int k = 0; k < 12; ++k) b = blend_round_cost(b.seconds, b.rounds, 0.019, 1);
+    CHECK(b.seconds == Approx(0.019).epsilon(0.01));
+    CHECK(b.rounds < 2.1);
+    // Equal rounds: the new measure weighs twice the earlier one.
+    CHECK(blend_round_cost(0.010, 4, 0.016, 4).seconds == Approx((0.016 * 4 + 0.010 * 2) / 6));
+    // No new measure: the earlier one, halved in weight.
+    b = blend_round_cost(0.01, 8, 0, 0);
+    CHECK(b.seconds == Approx(0.01));
+    CHECK(b.rounds == Approx(4));
+}
+
 TEST_CASE("a pass's predicted cost: the first pass's fixed part plus the last pass's rate",
           "[bake][schedule]") {
     PassTimer timer;
