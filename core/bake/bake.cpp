@@ -865,10 +865,11 @@ bool Baker::noise_target_met() const {
 // its passes (Scene::measured_pass_cost): sized by that measure
 // (measured_first_pass), in place of the one-round pass that
 // otherwise measures the cost — and which an optimal strategy then replaces
-// (its probe). On emissive_mesh at 128² a round takes ~11 ms and a first
-// pass ~10 ms more: in a 0.05 s budget the probe and one more round ended at
-// one or two samples by a few ms either way, where two rounds in one pass fit.
-// Not taken below two rounds: one round is the probe's own size.
+// (its probe). On emissive_mesh at 128² a round takes 12–15 ms and a first
+// pass ~6.5 ms more: in a 0.05 s budget the probe and one more round ended at
+// one or two samples by a few ms either way, where two rounds in one pass
+// take 37 ms (budgets.txt). Not taken below two rounds: one round is the
+// probe's own size.
 void Baker::size_first_pass() {
     if (!dyadic_) return;
     const auto cost = scene_.measured_pass_cost(bake_shape(settings_, layout_));
@@ -881,7 +882,8 @@ void Baker::size_first_pass() {
 }
 
 // What this bake's passes cost, for the next bake of its shape: the first
-// pass's fixed part, and a round at the rate the last pass ran.
+// pass's fixed part, and a round at the rate the last pass ran, blended with
+// the earlier bakes' (blend_round_cost).
 void Baker::remember_pass_cost() const {
     const double round = timer_.per_sample() * budget_.per_round;
     if (status_ == BakeStatus::Cancelled || first_pass_fixed_ < 0 || !(round > 0)) return;
