@@ -363,6 +363,7 @@ private:
     const BakeProgress& progress_;
     Clock::time_point start_;
     BakeLayout layout_;
+    const std::uint64_t shape_;  // bake_shape: where the Scene keeps its pass cost
     LightingContext context_;
     SampleBudget budget_;
     bool progressive_;
@@ -437,6 +438,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
       progress_(progress),
       start_(start),
       layout_(mesh_, settings_),
+      shape_(bake_shape(settings_, layout_)),
       context_(scene, settings_.lighting),
       budget_(plan_samples(context_, settings_.samples, settings_.lighting.rounds)),
       progressive_(settings_.time_budget > 0 || settings_.noise_target > 0),
@@ -872,7 +874,7 @@ bool Baker::noise_target_met() const {
 // probe's own size.
 void Baker::size_first_pass() {
     if (!dyadic_) return;
-    const auto cost = scene_.measured_pass_cost(bake_shape(settings_, layout_));
+    const auto cost = scene_.measured_pass_cost(shape_);
     if (!cost || !(cost->round > 0)) return;
     const double left = settings_.time_budget - elapsed() - cost->first_pass_fixed;
     const int rounds = measured_first_pass(left / cost->round, budget_.full_rounds);
@@ -887,12 +889,11 @@ void Baker::size_first_pass() {
 void Baker::remember_pass_cost() const {
     const double round = timer_.per_sample() * budget_.per_round;
     if (status_ == BakeStatus::Cancelled || first_pass_fixed_ < 0 || !(round > 0)) return;
-    const std::uint64_t shape = bake_shape(settings_, layout_);
     Scene::PassCost earlier;
-    if (const auto known = scene_.measured_pass_cost(shape)) earlier = *known;
+    if (const auto known = scene_.measured_pass_cost(shape_)) earlier = *known;
     const BlendedRoundCost blend =
         blend_round_cost(earlier.round, earlier.rounds, round, last_pass_rounds_);
-    scene_.remember_pass_cost(shape, {first_pass_fixed_, blend.seconds, blend.rounds});
+    scene_.remember_pass_cost(shape_, {first_pass_fixed_, blend.seconds, blend.rounds});
 }
 
 void Baker::run_passes() {

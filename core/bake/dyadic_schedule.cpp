@@ -97,14 +97,15 @@ void PassTimer::add(double samples, double seconds) {
     seconds_ = seconds;
 }
 
+double PassTimer::fixed_part() const { return std::min(fixed_, kMostFixed * seconds_); }
+
 double PassTimer::per_sample() const {
-    if (!(samples_ > 0)) return 0;
-    return (seconds_ - std::min(fixed_, kMostFixed * seconds_)) / samples_;
+    return samples_ > 0 ? (seconds_ - fixed_part()) / samples_ : 0;
 }
 
 double PassTimer::fit(double seconds) const {
     const double b = per_sample();
-    return b > 0 ? (seconds - std::min(fixed_, kMostFixed * seconds_)) / b : 0;
+    return b > 0 ? (seconds - fixed_part()) / b : 0;
 }
 
 double tail_weight(int net_rounds, int tail_rounds, double alpha) {

@@ -113,6 +113,7 @@ public:
 
 private:
     static constexpr double kMostFixed = 0.75;  // of the last pass: its rounds cost too
+    double fixed_part() const;                  // of the next pass, in seconds
     double samples_ = 0, seconds_ = 0;          // of the last pass
     double fixed_ = 0;
 };

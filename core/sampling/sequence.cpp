@@ -74,14 +74,14 @@ constexpr SobolTables kDim1Reversed(1, 0, 1, 0, 0, true);
 constexpr SobolTables kDim2Reversed(2, 1, 1, 3, 0, true);
 constexpr SobolTables kDim3Reversed(3, 1, 1, 3, 1, true);
 
-// owen_scramble, inline in the draws (a sample takes ~8 of them).
-inline std::uint32_t scramble(std::uint32_t x, std::uint32_t seed) {
-    return reverse_bits(laine_karras(reverse_bits(x), seed));
-}
-
 // owen_scramble(x, seed) given reverse_bits(x).
 inline std::uint32_t scramble_reversed(std::uint32_t reversed_x, std::uint32_t seed) {
     return reverse_bits(laine_karras(reversed_x, seed));
+}
+
+// owen_scramble, inline in the draws (a sample takes ~8 of them).
+inline std::uint32_t scramble(std::uint32_t x, std::uint32_t seed) {
+    return scramble_reversed(reverse_bits(x), seed);
 }
 
 // owen_scramble(sobol_dim0(i), seed): the reversals cancel.

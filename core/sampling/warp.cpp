@@ -197,14 +197,9 @@ double pdf_piecewise_bilinear(const Point2& p, const double* w, int g) {
     g = std::clamp(g, 1, kMaxPatches);
     if (g == 1) {
         // One patch (the cosine warp's, at every solid-angle sample and
-        // density): interpolate and integral without their loops, bit for bit
-        // (p·1 is p, each node weighs 0.5·0.5 exactly, the sum is over 1·1).
-        const int i = std::min(0, int(p.x)), j = std::min(0, int(p.y));
-        const double s = p.x - i, t = p.y - j;
-        const double* c = w + 2 * j + i;
-        const double value = (1 - s) * (1 - t) * c[0] + s * (1 - t) * c[1] +
-                             (1 - s) * t * c[2] + s * t * c[3];
-        return value / (w[0] * 0.25 + w[1] * 0.25 + w[2] * 0.25 + w[3] * 0.25);
+        // density): integral without its loops, bit for bit (each node weighs
+        // 0.5·0.5 exactly, the sum is over 1·1).
+        return interpolate(p, w, 1) / (w[0] * 0.25 + w[1] * 0.25 + w[2] * 0.25 + w[3] * 0.25);
     }
     return interpolate(p, w, g) / integral(w, g);
 }
