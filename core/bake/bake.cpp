@@ -310,12 +310,12 @@ struct StreamTally {
 // that, ...), so the target is checked often early on and the per-pass cost
 // (one solve per point) stays small later. Under a time budget alone: one
 // round (measures the cost; or what an earlier bake's measure says fits:
-// size_first_pass), then each pass half the time left but at most
-// 4× the one before, the last the rest (plan_pass). Every pass reaches every point: a
-// time budget ends on whole passes (the first always completes; the last
-// takes the time the measured cost says is left: plan_pass), so all points
-// end with the same count. Each point's draws continue one low-discrepancy sequence
-// across passes.
+// size_first_pass), then passes that end on powers of two of rounds and a
+// tail block where the next net no longer fits (plan_dyadic_pass;
+// bake/dyadic_schedule.h). Every pass reaches every point: a time budget
+// ends on whole passes (the first always completes; the last takes the time
+// the measured cost says is left), so all points end with the same count.
+// Each point's draws continue one low-discrepancy sequence across passes.
 class Baker {
 public:
     Baker(const Scene& scene, const BakeSettings& settings, const BakeProgress& progress,
