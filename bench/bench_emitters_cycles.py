@@ -12,8 +12,11 @@ grid over [−2, 2]² at 1 m of point lights or of 5 cm area lights facing down
 Per scene and renderer, the operator's time is fitted as t0 + k·spp from two
 bakes (Cycles: 2 and 32 spp; omis: 4 and 64 samples per texel, the effect
 plan's techniques, balance heuristic); k / texels is the time per
-texel-sample, in elapsed time and in the process's CPU time (all threads). Cycles' Diffuse bake, DIRECT only, margin 0; omis through the
-add-on's BakeJob (both timed as in bench/bench_cycles.py).
+texel-sample, in elapsed time and in the process's CPU time (all threads);
+growth is each renderer's CPU per sample over its own at the family's fewest
+emitters (issue 8's target: omis at most 2x from 16 to ~100k). Cycles' Diffuse
+bake, DIRECT only, margin 0; omis through the add-on's BakeJob (both timed as
+in bench/bench_cycles.py).
 """
 
 import argparse
@@ -120,8 +123,11 @@ def main():
     texels = args.size * args.size
     log(f"time per texel-sample (µs), {texels} texels; omis: balance, the plan's techniques")
     log("wall: elapsed; CPU: the process's CPU time over all threads")
+    log("growth: CPU per sample over the family's first (fewest emitters) row, each renderer's own")
     log(f"{'scene':<16} {'emitters':>9} {'cycles':>9} {'omis':>9} {'omis/cycles':>12}"
-        f" {'cycles CPU':>11} {'omis CPU':>9} {'CPU ratio':>10}")
+        f" {'cycles CPU':>11} {'omis CPU':>9} {'CPU ratio':>10}"
+        f" {'cycles growth':>14} {'omis growth':>12}")
+    first_cpu = {}  # family -> (Cycles, omis) CPU per sample of its first row
     for family, emitters, build in scenes:
         if emitters > args.max_emitters:
             continue
@@ -129,8 +135,10 @@ def main():
         build()
         c, c_cpu = (1e6 * t / texels for t in per_sample(cycles(objects), 2, 32))
         o, o_cpu = (1e6 * t / texels for t in per_sample(omis(objects), 4, 64))
+        c_first, o_first = first_cpu.setdefault(family, (c_cpu, o_cpu))
         log(f"{family:<16} {emitters:>9} {c:>9.3f} {o:>9.3f} {o / c:>11.2f}x"
-            f" {c_cpu:>11.3f} {o_cpu:>9.3f} {o_cpu / c_cpu:>9.2f}x")
+            f" {c_cpu:>11.3f} {o_cpu:>9.3f} {o_cpu / c_cpu:>9.2f}x"
+            f" {c_cpu / c_first:>13.2f}x {o_cpu / o_first:>11.2f}x")
 
 
 if __name__ == "__main__":
