@@ -2298,7 +2298,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     };
     // Finishes the light of the sample after (r, a, j) and begins the one
     // after that.
-    auto draw_ahead = [&](int r, std::size_t a, int j) {
+    auto draw_after = [&](int r, std::size_t a, int j) {
         if (!advance(r, a, j)) return;
         int k = active.all[a];
         if (draws_ahead(k)) {
@@ -2346,7 +2346,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                         draw_selector(k, seq, index, centre, footprint, *selected);
                     finish_selector_draw(*selected);  // (done a sample ahead)
                 }
-                if (draw_next_ahead_) draw_ahead(r, a, j);
+                if (draw_next_ahead_) draw_after(r, a, j);
                 take_sample(active, a, seq, index, centre, footprint, into,
                             by_stream_only ? 2 : 1,
                             table ? light_streams.draw(k, s, seq, index) : TableDraw{}, selected);
