@@ -209,12 +209,14 @@ struct PointLighting::Impl {
         double u1 = 0, u2 = 0;
         double fu = 0, fv = 0;
     };
-    // A selector technique's draw, made one sample ahead (shade): its
+    // A selector technique's draw, made ahead of its sample (shade): its
     // footprint position, its light and the shape's pair (u1 the selection's
-    // rest). The drawn light's record, whose first read after the tree walk
-    // was a cache miss among thousands of lights (~8 % of a sample at 16k
-    // emissive triangles), is then read while the sample before traces its
-    // ray. The same draw as at the sample: the tree's memo is a cache.
+    // rest). Two samples ahead the tree is walked down to a cluster, whose
+    // first line of the leaf-order CDF is then read (LightSelector::
+    // begin_draw); one sample ahead the draw is finished there and the drawn
+    // light's record is read. Each of these was a cache miss among thousands
+    // of lights, and is now read while earlier samples trace their rays. The
+    // same draw as at the sample: the tree's memo is a cache.
     struct SelectorDraw {
         int k = -1;  // -1: none made
         const ScrambledSobol* sequence = nullptr;
@@ -222,14 +224,25 @@ struct PointLighting::Impl {
         const LightSelector* selector = nullptr;  // technique k's
         SurfacePoint p;
         double u1 = 0, u2 = 0;
-        std::optional<SelectedLight> light;
+        std::optional<SelectedLight> light;  // once finished
+        bool finished = false;
+        LightSelector::PartialDraw partial;  // until then
         bool is(int k_, const ScrambledSobol& sequence_, std::uint32_t index_) const {
             return k == k_ && sequence == &sequence_ && index == index_;
         }
     };
+    void begin_selector_draw(int k, const ScrambledSobol& sequence, std::uint32_t index,
+                             const SurfacePoint& centre, const Footprint* footprint,
+                             SelectorDraw& d);
+    void finish_selector_draw(SelectorDraw& d);
     void draw_selector(int k, const ScrambledSobol& sequence, std::uint32_t index,
-                       const SurfacePoint& centre, const Footprint* footprint, SelectorDraw& d);
-    SelectorDraw selector_draws_[2];  // shade's: the sample's and the next one's
+                       const SurfacePoint& centre, const Footprint* footprint, SelectorDraw& d) {
+        begin_selector_draw(k, sequence, index, centre, footprint, d);
+        finish_selector_draw(d);
+    }
+    // shade's: the sample's, the next one's and the one's after
+    static constexpr int kSelectorDraws = 3;
+    SelectorDraw selector_draws_[kSelectorDraws];
     // `drawn` for a technique that draws from a per-point table, `selected`
     // for one that draws from a selector (null for `bsdf`).
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
@@ -543,7 +556,7 @@ struct PointLighting::Impl {
     const bool own_light_estimates_ = std::none_of(
         p_.scene.lights().begin(), p_.scene.lights().end(),
         [](const Light& l) { return l.type == LightType::Triangle; });
-    // Whether shade draws each selector sample's light one sample ahead
+    // Whether shade draws each selector sample's light ahead of it
     // (SelectorDraw; set after p_). Among few lights (kMaxTinyShapeTable's
     // bound) their records stay in cache: the look-ahead's bookkeeping, ~140
     // instructions a sample, would buy nothing.
@@ -613,8 +626,8 @@ struct PointLighting::Impl {
     LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
     // The light the sample being taken drew from `selector` at its position,
     // and the pmf the draw formed: its density takes that pmf, which the
-    // memo no longer holds once the next sample's light is drawn
-    // (SelectorDraw). The same product pmf() would form.
+    // memo does not hold for a light drawn ahead (SelectorDraw). The same
+    // product pmf() would form.
     struct DrawnSelection {
         const LightSelector* selector = nullptr;
         std::uint32_t light = ~0u;
@@ -935,9 +948,9 @@ double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& cen
 // sphere hiding part of the square light): relMSE 0.74×, 0.54×, 0.34× at 16,
 // 64, 256 samples, most in the penumbra (bench/results/error_sources.txt,
 // h-emesh9).
-void PointLighting::Impl::draw_selector(int k, const ScrambledSobol& sequence,
-                                        std::uint32_t index, const SurfacePoint& centre,
-                                        const Footprint* footprint, SelectorDraw& d) {
+void PointLighting::Impl::begin_selector_draw(int k, const ScrambledSobol& sequence,
+                                              std::uint32_t index, const SurfacePoint& centre,
+                                              const Footprint* footprint, SelectorDraw& d) {
     d.k = k;
     d.sequence = &sequence;
     d.index = index;
@@ -952,7 +965,14 @@ void PointLighting::Impl::draw_selector(int k, const ScrambledSobol& sequence,
     sequence.get_2d(index, 2, d.u1, d.u2);
     LightSelector::Memo* memo;
     const LightSelector::Receiver at = receiver_at(d.p.x, d.p.n, memo);
-    d.light = d.selector->sample(at, d.u1 + sequence.get_1d(index, 1) * 0x1.0p-32, memo);
+    d.partial = d.selector->begin_draw(at, d.u1 + sequence.get_1d(index, 1) * 0x1.0p-32, memo);
+    d.finished = false;
+}
+
+void PointLighting::Impl::finish_selector_draw(SelectorDraw& d) {
+    if (d.finished) return;
+    d.finished = true;
+    d.light = d.selector->finish_draw(d.partial);
     if (d.light) d.u1 = d.light->rest;
 }
 
@@ -2255,29 +2275,45 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                std::uint32_t(j);
     };
     // Techniques whose lights come from a selector: each sample's light is
-    // drawn into selector_draws_[now], and among many lights one sample
-    // ahead, into the other slot (SelectorDraw).
+    // drawn into selector_draws_[now], and among many lights begun two
+    // samples ahead and finished one ahead, in the slots after it
+    // (SelectorDraw).
     auto draws_ahead = [&](int k) {
         return !p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
     };
     int now = 0;
     for (SelectorDraw& d : selector_draws_) d.k = -1;  // last call's: other sequences
-    // Draws the light of the sample after (r, a, j), in the loop's order.
-    auto draw_after = [&](int r, std::size_t a, int j) {
+    // Moves (r, a, j) to the sample after it in the loop's order; false past
+    // the call's last.
+    auto advance = [&](int& r, std::size_t& a, int& j) {
         ++j;
         while (j >= counts[active.all[a]]) {
             j = 0;
             if (++a == active.all.size()) {
                 a = 0;
-                if (++r == first_round + rounds) return;
+                if (++r == first_round + rounds) return false;
             }
         }
-        const int k = active.all[a];
+        return true;
+    };
+    // Finishes the light of the sample after (r, a, j) and begins the one
+    // after that.
+    auto draw_after = [&](int r, std::size_t a, int j) {
+        if (!advance(r, a, j)) return;
+        int k = active.all[a];
+        if (draws_ahead(k)) {
+            SelectorDraw& next = selector_draws_[(now + 1) % kSelectorDraws];
+            const ScrambledSobol& seq = technique_sequence(std::size_t(k), r % K);
+            const std::uint32_t index = index_of(k, r, j);
+            if (next.is(k, seq, index)) finish_selector_draw(next);
+            else draw_selector(k, seq, index, centre, footprint, next);
+            if (next.light) prefetch_light(next.light->light);
+        }
+        if (!advance(r, a, j)) return;
+        k = active.all[a];
         if (!draws_ahead(k)) return;
-        SelectorDraw& next = selector_draws_[1 - now];
-        draw_selector(k, technique_sequence(std::size_t(k), r % K), index_of(k, r, j), centre,
-                      footprint, next);
-        if (next.light) prefetch_light(next.light->light);
+        begin_selector_draw(k, technique_sequence(std::size_t(k), r % K), index_of(k, r, j),
+                            centre, footprint, selector_draws_[(now + 2) % kSelectorDraws]);
     };
     for (int r = first_round; r < first_round + rounds; ++r) {
         const int s = r % K;
@@ -2308,12 +2344,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                     selected = &selector_draws_[now];
                     if (!selected->is(k, seq, index))
                         draw_selector(k, seq, index, centre, footprint, *selected);
+                    finish_selector_draw(*selected);  // (done a sample ahead)
                 }
                 if (draw_next_ahead_) draw_after(r, a, j);
                 take_sample(active, a, seq, index, centre, footprint, into,
                             by_stream_only ? 2 : 1,
                             table ? light_streams.draw(k, s, seq, index) : TableDraw{}, selected);
-                now = 1 - now;
+                now = (now + 1) % kSelectorDraws;
             }
         }
     }

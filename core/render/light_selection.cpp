@@ -682,6 +682,13 @@ bool LightSelector::may_reach(const Vec3& x, const Vec3& n) const {
     return !unbounded_.empty() || root_reaches(Receiver{x, n, 0.0}, nullptr);
 }
 
+// position_in's first guess in child i's range: where u would fall among
+// lights of equal power.
+std::uint32_t LightSelector::guess_in(const WideLinks& links, int i, double u) {
+    const std::uint32_t begin = links.start[i], end = links.start[i + 1];
+    return std::min(begin + std::uint32_t(u * double(end - begin)), end - 1);
+}
+
 // The lights of a cluster are alike (kClusterSine), so their powers are too,
 // mostly: the position a uniform u would take among them is a good first
 // guess, and the search gallops out from it. Among 100k lights a binary
@@ -700,8 +707,7 @@ std::uint32_t LightSelector::position_in(const WideLinks& links, const ChildCdf&
     // at least): the interval that holds target, as upper_bound over the range
     // finds it. `below` holds where that is true.
     auto below = [&](std::uint32_t p) { return p == begin || order_[p].cdf <= target; };
-    const std::uint32_t guess =
-        std::min(begin + std::uint32_t(u * double(end - begin)), end - 1);
+    const std::uint32_t guess = guess_in(links, i, u);
     prefetch_record(records_ + order_[guess].light);
     // Bracket the answer in [lo, hi] by steps of 1, 2, 4, … away from the guess.
     std::uint32_t lo = begin, hi = end - 1;
@@ -736,28 +742,41 @@ std::uint32_t LightSelector::position_in(const WideLinks& links, const ChildCdf&
 
 std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
                                                    Memo* memo) const {
-    if (ids_.empty()) return std::nullopt;
+    const PartialDraw draw = begin_draw(at, u, memo);
+    const std::optional<SelectedLight> light = finish_draw(draw);
+    if (memo && draw.from_tree && light) memo->drawn = light->light, memo->drawn_pmf = light->pmf;
+    return light;
+}
+
+LightSelector::PartialDraw LightSelector::begin_draw(const Receiver& at, double u,
+                                                     Memo* memo) const {
+    PartialDraw draw;
+    if (ids_.empty()) return draw;
     u = std::clamp(u, 0.0, std::nextafter(1.0, 0.0));
     if (kind_ == Kind::Uniform) {
         const double n = double(ids_.size());
         const std::size_t i = std::min(std::size_t(u * n), ids_.size() - 1);
-        return SelectedLight{ids_[i], 1.0 / n, rescale_within(u * n, double(i), 1.0)};
+        draw.light = SelectedLight{ids_[i], 1.0 / n, rescale_within(u * n, double(i), 1.0)};
+        return draw;
     }
     if (kind_ == Kind::Power) {
         const std::size_t i = std::min<std::size_t>(
             std::upper_bound(cdf_.begin(), cdf_.end(), u) - cdf_.begin(), ids_.size() - 1);
         const double lo = i > 0 ? cdf_[i - 1] : 0.0;
-        return SelectedLight{ids_[i], probability_[i], rescale_within(u, lo, cdf_[i] - lo)};
+        draw.light = SelectedLight{ids_[i], probability_[i], rescale_within(u, lo, cdf_[i] - lo)};
+        return draw;
     }
     // Tree: an unbounded light or the tree (where it reaches), uniformly;
     // then down the tree.
     const bool tree = root_reaches(at, memo);
     const std::size_t choices = unbounded_.size() + (tree ? 1 : 0);
-    if (choices == 0) return std::nullopt;
+    if (choices == 0) return draw;
     const std::size_t pick = std::min(std::size_t(u * double(choices)), choices - 1);
     u = rescale_within(u * double(choices), double(pick), 1.0);
-    if (pick < unbounded_.size())
-        return SelectedLight{unbounded_[pick], 1.0 / double(choices), u};
+    if (pick < unbounded_.size()) {
+        draw.light = SelectedLight{unbounded_[pick], 1.0 / double(choices), u};
+        return draw;
+    }
     double pmf = 1.0 / double(choices);
     std::uint32_t node = 0;
     double scratch[kWidth];
@@ -773,25 +792,41 @@ std::optional<SelectedLight> LightSelector::sample(const Receiver& at, double u,
         while (!(p[i] > 0) && i > 0) below -= p[--i];
         u = rescale_within(u, below, p[i]);
         pmf *= p[i];
-        std::uint32_t light = ~0u;
         if (links.is_leaf & (1u << i)) {
-            light = links.index[i];
-        } else if (clusters & (1u << i)) {
-            // A cluster: its lights ∝ power, u in its share of their CDF.
-            const ChildCdf& range = child_cdf_[node];
-            const std::uint32_t position = position_in(links, range, i, u);
-            const double step = order_[position + 1].cdf - order_[position].cdf;
-            pmf *= step / range.power(i);
-            light = order_[position].light;
-            u = rescale_within(range.cdf_point(i, u), order_[position].cdf, step);
+            draw.from_tree = true;
+            if (pmf > 0) draw.light = SelectedLight{links.index[i], pmf, u};  // else underflow
+            return draw;
         }
-        if (light != ~0u) {
-            if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
-            if (memo) memo->drawn = light, memo->drawn_pmf = pmf;
-            return SelectedLight{light, pmf, u};
+        if (clusters & (1u << i)) {
+            // A cluster: its lights ∝ power, u in its share of their CDF
+            // (finish_draw). Its first reads start here: the guess's entry
+            // (and the one after, its step's end) and the node's CDF line.
+            const std::uint32_t guess = guess_in(links, i, u);
+            __builtin_prefetch(&order_[guess]);
+            __builtin_prefetch(&order_[guess + 1]);
+            __builtin_prefetch(&child_cdf_[node]);
+            draw.in_cluster = draw.from_tree = true;
+            draw.node = node;
+            draw.child = i;
+            draw.u = u;
+            draw.pmf = pmf;
+            return draw;
         }
         node = links.index[i];
     }
+}
+
+std::optional<SelectedLight> LightSelector::finish_draw(const PartialDraw& draw) const {
+    if (!draw.in_cluster) return draw.light;
+    const WideLinks& links = links_[draw.node];
+    const ChildCdf& range = child_cdf_[draw.node];
+    const int i = draw.child;
+    const std::uint32_t position = position_in(links, range, i, draw.u);
+    const double step = order_[position + 1].cdf - order_[position].cdf;
+    const double pmf = draw.pmf * (step / range.power(i));
+    if (!(pmf > 0)) return std::nullopt;  // underflow below ~1e-308 only
+    return SelectedLight{order_[position].light, pmf,
+                         rescale_within(range.cdf_point(i, draw.u), order_[position].cdf, step)};
 }
 
 double LightSelector::pmf(const Receiver& at, std::uint32_t light, Memo* memo) const {

@@ -139,6 +139,24 @@ public:
         return sample(Receiver{x, n, 0.0}, u, memo);
     }
     std::optional<SelectedLight> sample(const Receiver& at, double u, Memo* memo = nullptr) const;
+    // sample() in two halves, for a caller that draws ahead of its samples:
+    // begin_draw walks the tree down to where the draw ends at a light or
+    // enters a cluster, and there starts reading the cluster's line of the
+    // leaf-order CDF (among 100k lights a cache miss, which the walk's other
+    // reads wait on); finish_draw, called later, searches that CDF. Their
+    // result is sample()'s bit for bit, whatever is drawn or asked between
+    // the two. Unlike sample(), they leave the memo's `drawn` as it was: the
+    // caller keeps the pmf of a light it drew ahead.
+    struct PartialDraw {
+        std::optional<SelectedLight> light;  // the draw, unless in_cluster
+        bool in_cluster = false;
+        int child = 0;            // in_cluster: child `child` of wide node `node`,
+        std::uint32_t node = 0;
+        double u = 0, pmf = 0;    // with u rescaled within its share, the walk's pmf
+        bool from_tree = false;   // the walk reached a light (sample() tells the memo)
+    };
+    PartialDraw begin_draw(const Receiver& at, double u, Memo* memo = nullptr) const;
+    std::optional<SelectedLight> finish_draw(const PartialDraw& draw) const;
     // The probability that sample() at (x, n) returns `light` (0 for a light
     // not in the selection).
     double pmf(const Vec3& x, const Vec3& n, std::uint32_t light, Memo* memo = nullptr) const {
@@ -276,6 +294,8 @@ private:
     // holds u ∈ [0, 1) (a draw inside a cluster).
     std::uint32_t position_in(const WideLinks& links, const ChildCdf& range, int i,
                               double u) const;
+    // Its first guess, which begin_draw starts reading.
+    static std::uint32_t guess_in(const WideLinks& links, int i, double u);
     // Whether the root's bounds reach `at`: the tree then takes its share.
     // Focuses the memo on it.
     bool root_reaches(const Receiver& at, Memo* memo) const;

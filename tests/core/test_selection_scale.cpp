@@ -426,3 +426,72 @@ TEST_CASE("a region's kept branching is what its draws use", "[selection]") {
     CHECK(dropped > 0);
     CHECK(total == Approx(1.0).epsilon(1e-12));
 }
+
+TEST_CASE("a draw begun ahead and finished later is sample()'s, and pmfs through its memo stay "
+          "right",
+          "[selection]") {
+    // shade draws each sample's light in two halves: begun two samples
+    // ahead, finished one ahead (begin_draw, finish_draw), the memo asked
+    // for other draws and pmfs in between — at the same receiver, and now
+    // and then at another (a sample outside a texel's region). Each draw
+    // must be sample()'s bit for bit, and a pmf through that memo a walk's:
+    // a draw ahead must not leave the memo's shortcut for "the light just
+    // drawn" (Memo::drawn) holding a light of another draw or receiver.
+    std::vector<Light> lights = far_ball(3000, Vec3(0, 0, 4), 0.3, 300);
+    lights.push_back(make_sun_light(Vec3(0, 0.3, -1), Vec3(1, 1, 1), 0.1));
+    lights.push_back(make_world_light(Vec3(1, 1, 1) * 0.1));
+    const std::vector<std::uint32_t> ids = all_ids(lights.size());
+    const LightSelector::Kind kinds[] = {LightSelector::Kind::Uniform,
+                                         LightSelector::Kind::Power, LightSelector::Kind::Tree};
+    for (auto kind : kinds) {
+        const LightSelector s(kind, lights, ids, 10.0);
+        Pcg32 rng(17, 2);
+        int in_cluster = 0, at_leaf = 0, unbounded = 0;
+        for (int p = 0; p < 24; ++p) {
+            const Vec3 x(3 * rng.next_double() - 1.5, 3 * rng.next_double() - 1.5,
+                         0.1 * rng.next_double());
+            const LightSelector::Receiver at{x, Vec3(0, 0, 1), p % 2 ? 0.02 : 0.0},
+                elsewhere{x + Vec3(0.4, -0.3, 0), normalize(Vec3(0.2, 0, 1)), 0.0};
+            constexpr int kDraws = 400;
+            std::vector<LightSelector::Receiver> where;
+            std::vector<double> u;
+            for (int k = 0; k < kDraws; ++k) {
+                where.push_back(k % 7 == 3 ? elsewhere : at);
+                u.push_back(rng.next_double());
+            }
+            LightSelector::Memo memo;
+            std::vector<LightSelector::PartialDraw> begun(kDraws);
+            begun[0] = s.begin_draw(where[0], u[0], &memo);
+            begun[1] = s.begin_draw(where[1], u[1], &memo);
+            for (int k = 0; k < kDraws; ++k) {
+                INFO("kind " << int(kind) << " point " << p << " draw " << k);
+                const auto light = s.finish_draw(begun[k]);
+                if (k + 2 < kDraws) begun[k + 2] = s.begin_draw(where[k + 2], u[k + 2], &memo);
+                const auto drawn = s.sample(where[k], u[k]);
+                REQUIRE(light.has_value() == drawn.has_value());
+                if (!light) continue;
+                in_cluster += begun[k].in_cluster;
+                at_leaf += begun[k].from_tree && !begun[k].in_cluster;
+                unbounded += light->light >= 3300;  // the sun, the world
+                CHECK(light->light == drawn->light);
+                CHECK(same_bits(light->pmf, drawn->pmf));
+                CHECK(same_bits(light->rest, drawn->rest));
+                // The light's pmf, and another's, through the memo; now and
+                // then after a whole sample() there, which tells the memo
+                // its light.
+                if (k % 5 == 0) s.sample(where[k], rng.next_double(), &memo);
+                CHECK(same_bits(s.pmf(where[k], light->light, &memo),
+                                s.pmf(where[k], light->light)));
+                const std::uint32_t other = rng.next_u32() % lights.size();
+                CHECK(same_bits(s.pmf(where[k], other, &memo), s.pmf(where[k], other)));
+            }
+        }
+        // The tree's draws took each way: beside the tree (2 of its 3
+        // choices), into a cluster, and down to a single light.
+        if (kind == LightSelector::Kind::Tree) {
+            CHECK(unbounded > 1000);
+            CHECK(in_cluster > 400);
+            CHECK(at_leaf > 1000);
+        }
+    }
+}
