@@ -549,7 +549,9 @@ struct PointLighting::Impl {
     // test each, ~200 instructions) costs less than listing them (an Embree
     // query of the emitter shapes).
     static constexpr std::size_t kFewTableLights = 4;
-    std::vector<std::size_t> along_slots_;  // technique_pdf's table slots along w
+    // technique_pdf's table slots along w, each with its light's index in
+    // along_.lights (for its hit test, Along::tests).
+    std::vector<std::pair<std::size_t, std::size_t>> along_slots_;
     // The last light sample: its light surely lies along its direction, and
     // its shape density there is the one the draw returned — pdf() reuses it
     // instead of inverting the draw (~10 % of a solid-angle sample) where the
@@ -740,13 +742,15 @@ double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec
     const Light& light = p_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny(l, light, x))
         sampler = ShapeSampler::Area;
-    if (known && known->known && sampler == ShapeSampler::Area &&
-        light.type == LightType::Triangle)
+    // Its triangle's hit test along w, where made: TriangleLight::intersect,
+    // as pdf_area and ray_crosses_light make it.
+    const bool tested = known && known->known && light.type == LightType::Triangle;
+    if (tested && sampler == ShapeSampler::Area)
         return light.triangle.pdf_area_at(known->hit, w, light.triangle_area);
     // A direction that misses the light has density 0 there: no need to
     // prepare its shape at x (the hit test's slack keeps the edge).
     if (sampler == ShapeSampler::SolidAngle && !solid_angle_ready(l) &&
-        !ray_crosses_light(light, x, w))
+        !(tested ? known->hit.has_value() : ray_crosses_light(light, x, w)))
         return 0.0;
     const SolidAngleCache* c =
         sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
@@ -1273,14 +1277,18 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         // The terms summed in the table's order, the others being 0: the
         // loop's sum, bit for bit.
         along_slots_.clear();
-        for (std::uint32_t l : lights_along(x, w)) {
+        const std::vector<std::uint32_t>& along = lights_along(x, w);
+        for (std::size_t j = 0; j < along.size(); ++j) {
             // A table lists its lights in p_.integrated's (ascending) order.
-            const auto it = std::lower_bound(c.lights.begin(), c.lights.end(), l);
-            if (it != c.lights.end() && *it == l) along_slots_.push_back(it - c.lights.begin());
+            const auto it = std::lower_bound(c.lights.begin(), c.lights.end(), along[j]);
+            if (it != c.lights.end() && *it == along[j])
+                along_slots_.push_back({std::size_t(it - c.lights.begin()), j});
         }
         std::sort(along_slots_.begin(), along_slots_.end());
-        for (std::size_t i : along_slots_)
-            pdf += c.probability[i] * this->pdf(c.lights[i], t.sampler, x, n, w);
+        const bool tested = along_.tested == along_serial_;
+        for (const auto& [i, j] : along_slots_)
+            pdf += c.probability[i] *
+                   this->pdf(c.lights[i], t.sampler, x, n, w, tested ? &along_.tests[j] : nullptr);
         counters.pdf_evaluations += along_slots_.size();
         return pdf;
     }
