@@ -110,6 +110,9 @@ public:
 
 private:
     void finish_round();
+    // add_sample at N = Nt techniques and C = Ct channels (0: N_, C_).
+    template <int Nt, int Ct>
+    void add_sample_at(int technique, const double* pdfs, const double* f);
     // Full symmetric Â, b̂, m̂ divided by R, in fixed storage (no allocation
     // per point); only the leading N×N, N×C and C entries are set.
     struct Moments {

@@ -64,6 +64,25 @@ bool tiny_in_solid_angle(const LightingContext::TinyShape& shape, const Vec3& x)
     return shape.area_limit < dot(d, d);
 }
 
+// Sorts `lights` and drops repeats. A closest hit's traversal lists a light
+// or two (a closed mesh's near and far side): an insertion sort then, where
+// std::sort's and std::unique's set-up were ~100 instructions a sample.
+void sort_unique(std::vector<std::uint32_t>& lights) {
+    constexpr std::size_t kFew = 8;
+    if (lights.size() > kFew) {
+        std::sort(lights.begin(), lights.end());
+        lights.erase(std::unique(lights.begin(), lights.end()), lights.end());
+        return;
+    }
+    for (std::size_t r = 1; r < lights.size(); ++r) {
+        const std::uint32_t l = lights[r];
+        std::size_t i = r;
+        for (; i > 0 && lights[i - 1] > l; --i) lights[i] = lights[i - 1];
+        lights[i] = l;
+    }
+    lights.erase(std::unique(lights.begin(), lights.end()), lights.end());
+}
+
 // Adds the seconds from its making to its end (or stop) to *into; with a
 // null `into` it reads no clock (timing that is off costs nothing).
 class ScopedTimer {
@@ -346,10 +365,14 @@ struct PointLighting::Impl {
         Vec3 main, hidden;
     };
     // world_through_: moves the world's part of f (a direction whose first
-    // hit, if any, emits: `through_emitter`) from main to hidden, where main
-    // holds it already (nothing hit) or holds the emitter's L_e (L_e − L_w).
-    void split_world(Integrand& f, const Vec3& x, const Vec3& w, bool through_emitter) const {
-        if (world_through_ == ~0u || !through_emitter) return;
+    // hit, `blocker`, if any, emits) from main to hidden, where main holds it
+    // already (nothing hit) or holds the emitter's L_e (L_e − L_w). Without
+    // such a world the blocker's mesh is not looked up (~30 instructions a
+    // sample among emissive triangles).
+    void split_world(Integrand& f, const Vec3& x, const Vec3& w,
+                     const std::optional<RayHit>& blocker) const {
+        if (world_through_ == ~0u) return;
+        if (blocker && !p_.scene.geometry().mesh(blocker->mesh).is_emissive()) return;
         const auto e = emitted_radiance(p_.scene.lights()[world_through_], x, w);
         if (!e) return;
         f.main -= e->radiance;
@@ -490,8 +513,14 @@ struct PointLighting::Impl {
     }
     static std::optional<LightSample> sample_cached(const SolidAngleCache& c, double u1,
                                                     double u2);
+    // A triangle light's hit test along a direction, once made (or not).
+    struct TriangleTest {
+        bool known = false;
+        std::optional<ShapeHit> hit;
+    };
+    // known: light l's hit test along w, where made (Along::tests).
     double pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
-               const Vec3& w);
+               const Vec3& w, const TriangleTest* known = nullptr);
     std::vector<SolidAngleCache> solid_angle_cache_;
     std::uint64_t point_serial_ = 0;
 
@@ -508,6 +537,12 @@ struct PointLighting::Impl {
         Vec3 x, w;
         bool valid = false;
         std::vector<std::uint32_t> lights;
+        // Per light of `lights`, its triangle's hit test along w where
+        // integrand_to_blocker made it (valid while along_serial_ = tested):
+        // the shape's area density takes it instead of a second test (~140
+        // instructions a sample among emissive triangles).
+        std::vector<TriangleTest> tests;
+        std::uint64_t tested = 0;
     } along_;
     struct ShapePdfs {
         std::uint64_t along = 0;  // along_serial_ they were evaluated for
@@ -527,7 +562,9 @@ struct PointLighting::Impl {
     // test each, ~200 instructions) costs less than listing them (an Embree
     // query of the emitter shapes).
     static constexpr std::size_t kFewTableLights = 4;
-    std::vector<std::size_t> along_slots_;  // technique_pdf's table slots along w
+    // technique_pdf's table slots along w, each with its light's index in
+    // along_.lights (for its hit test, Along::tests).
+    std::vector<std::pair<std::size_t, std::size_t>> along_slots_;
     // The last light sample: its light surely lies along its direction, and
     // its shape density there is the one the draw returned — pdf() reuses it
     // instead of inverting the draw (~10 % of a solid-angle sample) where the
@@ -710,7 +747,7 @@ std::optional<LightSample> PointLighting::Impl::sample_cached(const SolidAngleCa
 }
 
 double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
-                                const Vec3& n, const Vec3& w) {
+                                const Vec3& n, const Vec3& w, const TriangleTest* known) {
     // The sample's own density, before the light's record is read again
     // for the tiny-light test (the draw made the same choice).
     double drawn;
@@ -718,10 +755,15 @@ double PointLighting::Impl::pdf(std::uint32_t l, ShapeSampler sampler, const Vec
     const Light& light = p_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny(l, light, x))
         sampler = ShapeSampler::Area;
+    // Its triangle's hit test along w, where made: TriangleLight::intersect,
+    // as pdf_area and ray_crosses_light make it.
+    const bool tested = known && known->known && light.type == LightType::Triangle;
+    if (tested && sampler == ShapeSampler::Area)
+        return light.triangle.pdf_area_at(known->hit, w, light.triangle_area);
     // A direction that misses the light has density 0 there: no need to
     // prepare its shape at x (the hit test's slack keeps the edge).
     if (sampler == ShapeSampler::SolidAngle && !solid_angle_ready(l) &&
-        !ray_crosses_light(light, x, w))
+        !(tested ? known->hit.has_value() : ray_crosses_light(light, x, w)))
         return 0.0;
     const SolidAngleCache* c =
         sampler == ShapeSampler::SolidAngle ? solid_angle(l, x, n) : nullptr;
@@ -1007,7 +1049,9 @@ const std::vector<double>& PointLighting::Impl::shape_pdfs_along(
     c.sampler = sampler;
     c.n = n;
     c.pdf.clear();
-    for (std::uint32_t l : along) c.pdf.push_back(this->pdf(l, sampler, x, n, w));
+    const bool tested = &along == &along_.lights && along_.tested == along_serial_;
+    for (std::size_t i = 0; i < along.size(); ++i)
+        c.pdf.push_back(this->pdf(along[i], sampler, x, n, w, tested ? &along_.tests[i] : nullptr));
     counters.pdf_evaluations += along.size();
     return c.pdf;
 }
@@ -1065,7 +1109,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         (p_.scene.lights()[h.light].visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
     }
     if (need_rays)
-        split_world(f, x, w, !blocker || geometry.mesh(blocker->mesh).is_emissive());
+        split_world(f, x, w, blocker);
     // The receiver's closure (Lambert: cosθ/π), as Cycles' Diffuse bake sees it.
     const double closure = receiver_cosine_factor(p_.settings.receiver, cos_theta);
     f.main *= closure;
@@ -1121,9 +1165,8 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         // Every light along w: what lights_along(x, w) lists (the shapes the
         // traversal crossed, the unshaped lights, the drawn light), kept for
         // the densities (technique_pdf) as it would keep its own.
-        std::sort(merged_.begin(), merged_.end());
-        merged_.erase(std::unique(merged_.begin(), merged_.end()), merged_.end());
-        merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
+        sort_unique(merged_);
+        if (!unshaped.empty()) merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
         if (drew_light && std::find(merged_.begin(), merged_.end(), drawn) == merged_.end())
             merged_.push_back(drawn);
         along_.x = x;
@@ -1158,22 +1201,30 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
             clipped_.push_back(drawn);
     }
-    for (std::uint32_t l : *along) {
-        const Light& light = p_.scene.lights()[l];
+    // The triangles' hit tests kept for their densities (Along::tests).
+    const bool keep_tests = along == &along_.lights;
+    if (keep_tests) {
+        along_.tests.resize(along->size());
+        along_.tested = along_serial_;
+    }
+    for (std::size_t i = 0; i < along->size(); ++i) {
+        const Light& light = p_.scene.lights()[(*along)[i]];
         std::optional<Emitted> e;
         if (light.type == LightType::Triangle) {
             // Hidden first: the triangles behind the blocker (a closed mesh's
             // far side, about one a sample) need no radiance.
             const auto hit = light.triangle.intersect(x, w);
+            if (keep_tests) along_.tests[i] = {true, hit};
             if (!hit || hidden(light, hit->t)) continue;
             e = triangle_emitted(light, w, hit->t);
         } else {
+            if (keep_tests) along_.tests[i].known = false;
             e = emitted_radiance(light, x, w);
         }
         if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;
         (light.visible_to_bsdf ? f.main : f.hidden) += e->radiance;
     }
-    split_world(f, x, w, !blocker || geometry.mesh(blocker->mesh).is_emissive());
+    split_world(f, x, w, blocker);
     const double closure = receiver_cosine_factor(p_.settings.receiver, cos_theta);
     f.main *= closure;
     f.hidden *= closure;
@@ -1246,14 +1297,18 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         // The terms summed in the table's order, the others being 0: the
         // loop's sum, bit for bit.
         along_slots_.clear();
-        for (std::uint32_t l : lights_along(x, w)) {
+        const std::vector<std::uint32_t>& along = lights_along(x, w);
+        for (std::size_t j = 0; j < along.size(); ++j) {
             // A table lists its lights in p_.integrated's (ascending) order.
-            const auto it = std::lower_bound(c.lights.begin(), c.lights.end(), l);
-            if (it != c.lights.end() && *it == l) along_slots_.push_back(it - c.lights.begin());
+            const auto it = std::lower_bound(c.lights.begin(), c.lights.end(), along[j]);
+            if (it != c.lights.end() && *it == along[j])
+                along_slots_.push_back({std::size_t(it - c.lights.begin()), j});
         }
         std::sort(along_slots_.begin(), along_slots_.end());
-        for (std::size_t i : along_slots_)
-            pdf += c.probability[i] * this->pdf(c.lights[i], t.sampler, x, n, w);
+        const bool tested = along_.tested == along_serial_;
+        for (const auto& [i, j] : along_slots_)
+            pdf += c.probability[i] *
+                   this->pdf(c.lights[i], t.sampler, x, n, w, tested ? &along_.tests[j] : nullptr);
         counters.pdf_evaluations += along_slots_.size();
         return pdf;
     }
@@ -1549,17 +1604,22 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     // shape from its own sequence: `drawn`).
     const int k = active.all[a];
     const Technique& t = p_.settings.techniques[k];
-    SurfacePoint p = centre;
+    // The sample's position: the centre, the selector draw's, or one drawn
+    // here (referred to, not copied: two copies were ~35 instructions).
+    SurfacePoint drawn_at;
+    const SurfacePoint* at = &centre;
     if (footprint) {
         if (selected) {
-            p = selected->p;
+            at = &selected->p;
         } else {
             double fu = drawn.fu, fv = drawn.fv;
             if (t.bsdf) sequence.get_2d(index, 0, fu, fv);
-            p = footprint->at(fu, fv);
+            drawn_at = footprint->at(fu, fv);
+            at = &drawn_at;
         }
         ++point_serial_;  // the solid-angle cache holds one position's shapes
     }
+    const SurfacePoint& p = *at;
     const int hidden_index =
         into[0].hidden && in_hidden_part(k)
             ? int(std::find(active.hidden.begin(), active.hidden.end(), k) - active.hidden.begin())
@@ -1691,7 +1751,7 @@ void PointLighting::Impl::take_world_sample(const Active& active, const SurfaceP
     const std::optional<RayHit> blocker = geometry.closest_hit(
         offset_ray_origin(p.x, p.ng, w), w, 0, std::numeric_limits<double>::infinity());
     Integrand f;
-    split_world(f, p.x, w, !blocker || geometry.mesh(blocker->mesh).is_emissive());
+    split_world(f, p.x, w, blocker);
     const Vec3 world = f.hidden * receiver_cosine_factor(p_.settings.receiver, cos_theta);
     const double world_f[3] = {world.x, world.y, world.z};
     double pdfs[kMaxMisTechniques];

@@ -199,7 +199,11 @@ std::optional<LightSample> TriangleLight::sample_area(const Vec3& x, double u1, 
 }
 
 double TriangleLight::pdf_area(const Vec3& x, const Vec3& w, double area) const {
-    const auto hit = intersect(x, w);
+    return pdf_area_at(intersect(x, w), w, area);
+}
+
+double TriangleLight::pdf_area_at(const std::optional<ShapeHit>& hit, const Vec3& w,
+                                  double area) const {
     if (!hit) return 0.0;
     const NormalAndArea f = normal_of_area(cross(p1 - p0, p2 - p0), 0.5, area);
     return area_pdf(hit, w, f.normal, f.area);

@@ -95,6 +95,8 @@ struct TriangleLight {
     std::optional<LightSample> sample_area(const Vec3& x, double u1, double u2,
                                            double area) const;
     double pdf_area(const Vec3& x, const Vec3& w, double area) const;
+    // The same from intersect(x, w)'s result, where the caller made it.
+    double pdf_area_at(const std::optional<ShapeHit>& hit, const Vec3& w, double area) const;
     std::optional<LightSample> sample_solid_angle(const Vec3& x, double u1, double u2) const;
     double pdf_solid_angle(const Vec3& x, const Vec3& w) const;
     std::optional<LightSample> sample_solid_angle(const Vec3& x, const Vec3& n, double u1,
