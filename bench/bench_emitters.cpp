@@ -25,7 +25,8 @@
 // spreads its samples over its grid cell, as a bake's texel does: every
 // sample at its own position), --rounds N (4 unless given), --general (each
 // scene also without DirectLightingSettings::fast_paths, in the same run: a
-// family of its own, "… general").
+// family of its own, "… general"), --techniques A,B (those techniques, one
+// sample each a round, instead of the effect plan's: to compare selections).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -121,7 +122,8 @@ struct Timed {
 
     // extent: the side of the square of receivers about the origin.
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
-          int grid, bool texels_, int rounds, bool fast_paths, double extent = 4.0)
+          int grid, bool texels_, int rounds, bool fast_paths, double extent = 4.0,
+          const std::vector<Technique>& forced = {})
         : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(extent / grid) {
         add_floor(scene);
         build(scene);
@@ -129,6 +131,10 @@ struct Timed {
         scene.commit();  // the Embree scenes (meshes and emitter candidates)
         commit_ms = 1e3 * (cpu_seconds() - c0);
         default_techniques(scene, settings.techniques, settings.samples);
+        if (!forced.empty()) {
+            settings.techniques = forced;
+            settings.samples.assign(forced.size(), 1);
+        }
         settings.rounds = rounds;
         settings.fast_paths = fast_paths;
         for (int j = 0; j < grid; ++j)
@@ -201,6 +207,7 @@ int main(int argc, char** argv) {
     int only_emitters = 0;  // --emitters N: only scenes of N emitters
     int reps = 5, rounds = 4;
     bool texels = false, general = false;
+    std::vector<Technique> forced;  // --techniques
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
@@ -212,8 +219,22 @@ int main(int argc, char** argv) {
             rounds = std::max(1, std::atoi(argv[++i]));
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
         else if (std::strcmp(argv[i], "--general") == 0) general = true;
+        else if (std::strcmp(argv[i], "--techniques") == 0 && i + 1 < argc) {
+            std::string list = argv[++i];
+            for (std::size_t start = 0; start <= list.size();) {
+                const std::size_t end = std::min(list.find(',', start), list.size());
+                const auto t = parse_technique(list.substr(start, end - start));
+                if (!t) {
+                    std::fprintf(stderr, "unknown technique '%s'\n",
+                                 list.substr(start, end - start).c_str());
+                    return 2;
+                }
+                forced.push_back(*t);
+                start = end + 1;
+            }
+        }
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|race|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|race|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general] [--techniques A,B]\n",
                          argv[0]);
             return 2;
         }
@@ -232,7 +253,7 @@ int main(int argc, char** argv) {
             if (wanted("sphere", 2 * slices * (stacks - 1)))
                 scenes.push_back(std::make_unique<Timed>(
                     "emissive sphere", 2 * slices * (stacks - 1),
-                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast));
+                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast, 4.0, forced));
         // The sphere over an opaque plate that shadows half of the floor:
         // many light samples there see nothing (their integrand is 0).
         for (auto [stacks, slices] : spheres)
@@ -245,18 +266,18 @@ int main(int argc, char** argv) {
                                                      {0, 3, 0.8}},
                                    {{0, 1, 2}, {0, 2, 3}});
                     },
-                    grid, texels, rounds, fast));
+                    grid, texels, rounds, fast, 4.0, forced));
         if (wanted("race", 16129))
             scenes.push_back(std::make_unique<Timed>("race mesh", 16129, testing::add_race_mesh,
-                                                     grid, texels, rounds, fast, 2.0));
+                                                     grid, texels, rounds, fast, 2.0, forced));
         for (int side : {1, 4, 16, 100})
             if (wanted("point", side * side))
                 scenes.push_back(std::make_unique<Timed>(
-                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast));
+                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced));
         for (int side : {1, 4, 16, 100})
             if (wanted("area", side * side))
                 scenes.push_back(std::make_unique<Timed>(
-                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast));
+                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced));
     }
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every

@@ -240,6 +240,7 @@ const char* light_type_name(LightType type) {
         case LightType::Spot: return "spot";
         case LightType::Sun: return "sun";
         case LightType::World: return "world";
+        case LightType::Mesh: return "mesh";
     }
     return "unknown";
 }
@@ -274,6 +275,7 @@ double Light::power(double scene_radius) const {
         case LightType::Spot: return 4 * kPi * lum;  // Cycles does not renormalise spots
         case LightType::Sun: return lum * kPi * scene_radius * scene_radius;
         case LightType::World: return kPi * lum * kPi * scene_radius * scene_radius;
+        case LightType::Mesh: return kPi * mesh_area * lum * 2;  // its triangles', both sides
     }
     return 0;
 }
@@ -414,6 +416,37 @@ Light make_world_light(const Vec3& radiance) {
     return l;
 }
 
+Light make_mesh_light(std::uint32_t mesh, const Vec3& centre, double radius, double area,
+                      const Vec3& radiance) {
+    require_emission(radiance, "radiance");
+    require_finite(centre, "centre");
+    if (!(radius > 0) || !std::isfinite(radius) || !(area > 0) || !std::isfinite(area))
+        throw std::invalid_argument("mesh light: radius and area must be positive and finite");
+    Light l;
+    l.type = LightType::Mesh;
+    l.two_sided = true;
+    l.mesh = mesh;
+    l.emission = radiance;
+    l.position = centre;
+    l.radius = radius;
+    l.mesh_area = area;
+    return l;
+}
+
+namespace {
+
+// A point this close to a mesh light's bounding sphere (relative to its
+// radius), or inside it, sees the mesh over too wide a cone to draw it
+// from: it draws the cosine hemisphere instead.
+constexpr double kMeshConeMargin = 1e-4;
+
+}  // namespace
+
+bool mesh_light_draws_cone(const Light& l, const Vec3& x) {
+    const Vec3 d = l.position - x;
+    return dot(d, d) > l.radius * l.radius * (1 + kMeshConeMargin) * (1 + kMeshConeMargin);
+}
+
 Emitted triangle_emitted(const Light& l, const Vec3& w, double distance) {
     return Emitted{planar_radiance(l, w), distance};
 }
@@ -457,6 +490,7 @@ std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec
             return Emitted{l.emission / (kPi * tan_a * tan_a * c * c * c), kInf};
         }
         case LightType::World: return Emitted{l.emission, kInf};
+        case LightType::Mesh: return std::nullopt;  // its triangles' hits emit
     }
     return std::nullopt;
 }
@@ -528,6 +562,7 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
         case LightType::Sun:
             return l.sun_half_angle > 0 && dot(l.to_sun, n) > -std::sin(l.sun_half_angle);
         case LightType::World: return true;
+        case LightType::Mesh: return dot(l.position - x, n) > -l.radius;
     }
     return false;
 }
@@ -551,12 +586,26 @@ bool sampler_applies(const Light& l, ShapeSampler sampler, const Vec3& x, const 
         case LightType::Triangle: return l.triangle.parallel(x, n).has_value();
         case LightType::Point:
         case LightType::Spot: return sphere_of(l).facing_disk(x).parallel(x, n).has_value();
+        case LightType::Mesh: return true;  // its cone or hemisphere, whatever the sampler
         default: return false;  // no planar region to project for sun and world
     }
 }
 
 std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, const Vec3& x,
                                         const Vec3& n, double u1, double u2) {
+    if (l.type == LightType::Mesh) {
+        // Every sampler: directions toward the bounding sphere, uniform in
+        // solid angle; the first hit along one decides what it sees.
+        if (mesh_light_draws_cone(l, x)) {
+            const Cone c = Cone::around_sphere(x, l.position, l.radius);
+            if (!(c.one_minus_cos > 0)) return std::nullopt;
+            return LightSample{c.sample(u1, u2), kInf, 1.0 / c.solid_angle()};
+        }
+        const Vec3 local = sample_cosine_hemisphere(u1, u2);
+        const double pdf = pdf_cosine_hemisphere(local);
+        if (!(pdf > 0)) return std::nullopt;
+        return LightSample{Frame(n).to_world(local), kInf, pdf};
+    }
     if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.sample_projected(x, n, u1, u2);
         if (l.type == LightType::Rect) {
@@ -607,12 +656,20 @@ std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, co
             if (!(pdf > 0)) return std::nullopt;
             return LightSample{frame.to_world(local), kInf, pdf};
         }
+        case LightType::Mesh: break;  // above
     }
     return std::nullopt;
 }
 
 double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w) {
+    if (l.type == LightType::Mesh) {
+        if (mesh_light_draws_cone(l, x)) {
+            const Cone c = Cone::around_sphere(x, l.position, l.radius);
+            return c.one_minus_cos > 0 ? c.pdf(w) : 0.0;
+        }
+        return std::max(0.0, dot(n, w)) * kInvPi;
+    }
     if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.pdf_projected(x, n, w);
         if (l.type == LightType::Rect) {
@@ -652,6 +709,7 @@ double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3
         case LightType::Sun:
             return l.sun_half_angle > 0 ? sun_of(l).pdf_solid_angle(w) : 0;
         case LightType::World: return std::max(0.0, dot(n, w)) * kInvPi;
+        case LightType::Mesh: break;  // above
     }
     return 0;
 }
@@ -765,6 +823,19 @@ double unoccluded_irradiance(const Light& l, const Vec3& x, const Vec3& n) {
             // Straddling the horizon still reaches: keep a positive weight.
             return lum * std::max(dot(n, l.to_sun), 0.5 * std::sin(l.sun_half_angle));
         case LightType::World: return kPi * lum;
+        case LightType::Mesh: {
+            // The bounding sphere's irradiance as if it emitted all over (a
+            // selection weight: the mesh fills most of it, Scene::commit),
+            // smoothed across the horizon so that it stays positive wherever
+            // part of the sphere is above it.
+            if (!mesh_light_draws_cone(l, x)) return kPi * lum;
+            const Vec3 d = l.position - x;
+            const double dist = length(d);
+            const double sin_a = std::min(1.0, l.radius / dist), cos_c = dot(n, d) / dist;
+            const double cos_eff = cos_c >= sin_a ? cos_c
+                                                  : (cos_c + sin_a) * (cos_c + sin_a) / (4 * sin_a);
+            return lum * kPi * sin_a * sin_a * cos_eff;
+        }
     }
     return 0;
 }

@@ -13,7 +13,10 @@
 
 namespace omis {
 
-enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World };
+// Mesh: an emissive mesh drawn as one light (Scene::commit groups compact
+// meshes): directions toward its bounding sphere, its radiance where the
+// first hit along them is on the mesh.
+enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World, Mesh };
 const char* light_type_name(LightType type);
 
 // How a light technique draws a direction toward the light it has chosen — the
@@ -55,8 +58,9 @@ struct alignas(64) Light {
         double length1 = 0, length2 = 0;           // of its two spanning vectors
     } spread_constants;
 
-    Vec3 position;           // Point/Spot
-    double radius = 0;       // Point/Spot: > 0 makes a disk facing the receiver
+    Vec3 position;           // Point/Spot; Mesh: its bounding sphere's centre
+    double radius = 0;       // Point/Spot: > 0 makes a disk facing the receiver; Mesh: the sphere's
+    double mesh_area = 0;    // Mesh: the area of its triangles (one side)
     Vec3 spot_axis;          // Spot: unit direction the spot shines along
     double spot_cos_half = -1, spot_smooth = 0;  // Spot: cos(size/2), blend width in cos
 
@@ -94,6 +98,13 @@ Light make_spot_light(const Vec3& position, const Vec3& direction, const Vec3& i
 // direction: the way the light travels (Blender's −Z); angle: full angular diameter.
 Light make_sun_light(const Vec3& direction, const Vec3& irradiance, double angle);
 Light make_world_light(const Vec3& radiance);
+// An emissive mesh as one two-sided light: `mesh` (its id in the geometry),
+// the centre and radius of a sphere holding it, its area and radiance.
+Light make_mesh_light(std::uint32_t mesh, const Vec3& centre, double radius, double area,
+                      const Vec3& radiance);
+// Whether a mesh light draws its bounding sphere's cone at x (x outside the
+// sphere), or else the cosine hemisphere about n.
+bool mesh_light_draws_cone(const Light& light, const Vec3& x);
 
 // Rec. 709 luminance, the scalar used for selection weights and noise.
 inline double luminance(const Vec3& rgb) {
@@ -106,6 +117,8 @@ struct Emitted {
     Vec3 radiance;
     double distance = 0;
 };
+// Mesh lights emit through their mesh's triangles: the first hit along w
+// decides (direct_lighting.cpp); here they give none.
 std::optional<Emitted> emitted_radiance(const Light& light, const Vec3& x, const Vec3& w);
 // The same for a triangle light whose shape w meets at `distance` (its
 // intersect's t): a caller that first tests the hit (against a blocker) forms

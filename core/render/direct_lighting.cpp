@@ -396,6 +396,17 @@ struct PointLighting::Impl {
     // (a set of directions of measure zero).
     Integrand integrand_to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
                                    std::uint32_t drawn, double drawn_distance);
+    // The radiance of the mesh lights among `lights` whose mesh is the
+    // closest hit along w (`blocker`), added to f (before the closure).
+    void add_mesh_lights_seen(Integrand& f, const std::vector<std::uint32_t>& lights,
+                              const std::optional<RayHit>& blocker) const {
+        if (!blocker || !p_.scene.geometry().mesh(blocker->mesh).is_emissive()) return;
+        for (std::uint32_t l : lights) {
+            const Light& light = p_.scene.lights()[l];
+            if (light.type == LightType::Mesh && light.mesh == blocker->mesh)
+                (light.visible_to_bsdf ? f.main : f.hidden) += light.emission;
+        }
+    }
     // Light l's own part of the integrand along w (visible from x or not).
     Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
                               const Vec3& w);
@@ -1062,11 +1073,20 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     const double cos_theta = dot(n, w);
     if (!(cos_theta > 0)) return f;
     hits_.clear();
+    // Mesh lights whose bounding sphere w meets: the closest hit tells
+    // whether their mesh is seen.
+    bool meshes = false;
     for (std::uint32_t l : lights_along(x, w)) {
-        const auto e = emitted_radiance(p_.scene.lights()[l], x, w);
+        const Light& light = p_.scene.lights()[l];
+        if (light.type == LightType::Mesh) {
+            meshes = meshes || (luminance(light.emission) > 0 &&
+                                SphereLight{light.position, light.radius}.intersect(x, w));
+            continue;
+        }
+        const auto e = emitted_radiance(light, x, w);
         if (e && luminance(e->radiance) > 0) hits_.push_back({l, *e});
     }
-    if (hits_.empty()) return f;
+    if (hits_.empty() && !meshes) return f;
 
     const GeometryScene& geometry = p_.scene.geometry();
     const Vec3 origin = offset_ray_origin(x, ng, w);
@@ -1086,8 +1106,8 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     // (or at its depth, on a coplanar neighbour) does not shadow it.
     std::optional<RayHit> blocker;
     bool single_blocked = false;
-    const bool single = hits_.size() == 1 && only_analytic && world_through_ == ~0u;
-    if (need_rays) {
+    const bool single = hits_.size() == 1 && only_analytic && world_through_ == ~0u && !meshes;
+    if (need_rays || meshes) {
         ++counters.rays;
         if (single)
             single_blocked = geometry.occluded(origin, w, 0, hits_[0].emitted.distance - offset);
@@ -1108,6 +1128,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         if (!visible(h)) continue;
         (p_.scene.lights()[h.light].visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
     }
+    if (meshes) add_mesh_lights_seen(f, lights_along(x, w), blocker);
     if (need_rays)
         split_world(f, x, w, blocker);
     // The receiver's closure (Lambert: cosθ/π), as Cycles' Diffuse bake sees it.
@@ -1210,6 +1231,10 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     for (std::size_t i = 0; i < along->size(); ++i) {
         const Light& light = p_.scene.lights()[(*along)[i]];
         std::optional<Emitted> e;
+        if (light.type == LightType::Mesh) {
+            if (keep_tests) along_.tests[i].known = false;
+            continue;  // below, from the blocker
+        }
         if (light.type == LightType::Triangle) {
             // Hidden first: the triangles behind the blocker (a closed mesh's
             // far side, about one a sample) need no radiance.
@@ -1224,6 +1249,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;
         (light.visible_to_bsdf ? f.main : f.hidden) += e->radiance;
     }
+    add_mesh_lights_seen(f, *along, blocker);
     split_world(f, x, w, blocker);
     const double closure = receiver_cosine_factor(p_.settings.receiver, cos_theta);
     f.main *= closure;
@@ -1237,6 +1263,19 @@ PointLighting::Impl::Integrand PointLighting::Impl::light_integrand(std::uint32_
                                                                     const Vec3& ng,
                                                                     const Vec3& w) {
     Integrand f;
+    const Light& light = p_.scene.lights()[l];
+    if (light.type == LightType::Mesh) {
+        // Seen where the closest hit is on its mesh.
+        const double cos_theta = dot(n, w);
+        if (!(cos_theta > 0)) return f;
+        ++counters.rays;
+        const auto hit = p_.scene.geometry().closest_hit(
+            offset_ray_origin(x, ng, w), w, 0, std::numeric_limits<double>::infinity());
+        if (!hit || hit->mesh != light.mesh) return f;
+        (light.visible_to_bsdf ? f.main : f.hidden) =
+            light.emission * receiver_cosine_factor(p_.settings.receiver, cos_theta);
+        return f;
+    }
     const auto u = light_unoccluded(l, x, n, w);
     if (!u || light_occluded(l, x, ng, w, u->distance)) return f;
     (p_.scene.lights()[l].visible_to_bsdf ? f.main : f.hidden) = u->radiance * u->cosine_factor;

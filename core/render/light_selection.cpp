@@ -221,6 +221,9 @@ double weight_of(const Light& l, double scene_radius) {
         case LightType::Rect:
         case LightType::Ellipse:
         case LightType::Triangle: return l.two_sided ? flux / 2 : flux;
+        // A mesh light is compact (Scene::commit): seen from afar it shows
+        // about a quarter of its area, as a convex body does.
+        case LightType::Mesh: return flux / 8;
         default: return flux;
     }
 }
@@ -250,6 +253,16 @@ std::optional<LightSelector::Bounds> LightSelector::bounds_of(const Light& l,
             b = box_of({t.p0, t.p1, t.p2});
             b.axis = normalize(cross(t.p1 - t.p0, t.p2 - t.p0));
             break;
+        }
+        case LightType::Mesh: {
+            // Its bounding sphere, emitting every way (as a sphere light).
+            const Vec3 r(l.radius, l.radius, l.radius);
+            b = box_of({l.position - r, l.position + r});
+            b.cos_theta_o = -1.0;
+            b.cos_theta_e = 0.0;
+            b.power = weight_of(l, scene_radius);
+            b.finish();
+            return b;
         }
         case LightType::Point:
         case LightType::Spot: {

@@ -1,6 +1,7 @@
 #include "render/scene.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 namespace omis {
@@ -57,6 +58,53 @@ const Receiver& Scene::mesh_receiver(std::uint32_t mesh) const {
     return mesh < receivers_.size() ? receivers_[mesh] : lambert;
 }
 
+void Scene::set_mesh_lights(bool on) {
+    if (committed_) throw std::logic_error("scene: already committed; set mesh lights before commit");
+    mesh_lights_ = on;
+}
+
+namespace {
+
+// The emissive meshes commit() draws as one light each (Scene::set_mesh_lights),
+// with their lights: a sphere holding each (about its box's centre, grown
+// a little past single precision's rounding of the vertices Embree
+// intersects) and its area.
+std::vector<Light> mesh_lights_of(const GeometryScene& geometry,
+                                  const std::vector<EmissiveTriangle>& emissive) {
+    const std::size_t meshes = geometry.num_meshes();
+    std::vector<double> area(meshes, 0);
+    std::vector<std::size_t> count(meshes, 0);
+    std::vector<Vec3> lo(meshes, Vec3(INFINITY, INFINITY, INFINITY)),
+        hi(meshes, Vec3(-INFINITY, -INFINITY, -INFINITY));
+    for (const EmissiveTriangle& t : emissive) {
+        area[t.mesh] += t.area;
+        ++count[t.mesh];
+        for (const Vec3& v : t.vertices) {
+            lo[t.mesh] = component_min(lo[t.mesh], v);
+            hi[t.mesh] = component_max(hi[t.mesh], v);
+        }
+    }
+    std::vector<double> radius2(meshes, 0);
+    for (const EmissiveTriangle& t : emissive) {
+        const Vec3 centre = (lo[t.mesh] + hi[t.mesh]) * 0.5;
+        for (const Vec3& v : t.vertices)
+            radius2[t.mesh] = std::max(radius2[t.mesh], dot(v - centre, v - centre));
+    }
+    std::vector<Light> lights;
+    for (std::uint32_t m = 0; m < meshes; ++m) {
+        if (count[m] < Scene::kMeshLightTriangles || !(radius2[m] > 0)) continue;
+        const Vec3 centre = (lo[m] + hi[m]) * 0.5;
+        const double span = std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z)});
+        const double radius = std::sqrt(radius2[m]) * (1 + 1e-5) + 1e-6 * span;
+        if (area[m] < Scene::kMeshLightFill * 4 * kPi * radius * radius) continue;
+        lights.push_back(make_mesh_light(m, centre, radius, area[m],
+                                         *geometry.mesh(m).emission));
+    }
+    return lights;
+}
+
+}  // namespace
+
 void Scene::commit() {
     if (committed_) return;
     analytic_lights_ = lights_.size();
@@ -86,8 +134,16 @@ void Scene::commit() {
 
     // Emissive meshes emit from both sides, as Cycles' Emission shader does.
     const std::vector<EmissiveTriangle> emissive = geometry_.emissive_triangles();
+    std::vector<bool> whole(geometry_.num_meshes(), false);  // drawn as a mesh light
+    if (mesh_lights_)
+        for (const Light& l : mesh_lights_of(geometry_, emissive)) {
+            lights_.push_back(l);
+            whole[l.mesh] = true;
+            light_meshes_.push_back(l.mesh);
+        }
     lights_.reserve(lights_.size() + emissive.size());  // Lights are large: no growth copies
     for (const EmissiveTriangle& t : emissive) {
+        if (whole[t.mesh]) continue;
         Light light = make_triangle_light(t.vertices[0], t.vertices[1], t.vertices[2],
                                           t.radiance, /*two_sided=*/true);
         light.mesh = t.mesh;
@@ -147,7 +203,8 @@ void Scene::build_emitter_shapes() {
             vertices.insert(vertices.end(), all.begin() + 9 * i, all.begin() + 9 * (i + 1));
             candidate_light_of.push_back(light_of[i]);
         }
-        geometry_.set_emitter_candidates(vertices, std::move(candidate_light_of), mesh_lights);
+        geometry_.set_emitter_candidates(vertices, std::move(candidate_light_of), mesh_lights,
+                                         light_meshes_);
     }
     emitter_shapes_.commit();
 }

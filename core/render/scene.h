@@ -24,7 +24,8 @@ public:
     Scene& operator=(const Scene&) = delete;
 
     // Returns the mesh id. An emissive mesh also becomes one two-sided
-    // triangle light per non-degenerate triangle at commit().
+    // triangle light per non-degenerate triangle at commit() — or one mesh
+    // light for the whole mesh where it is compact (mesh_lights below).
     std::uint32_t add_mesh(const MeshInput& mesh);
     // Convenience for C++ callers and tests.
     std::uint32_t add_mesh(const std::vector<Vec3>& positions,
@@ -38,12 +39,25 @@ public:
     void set_mesh_receiver(std::uint32_t mesh, const Receiver& receiver);
     const Receiver& mesh_receiver(std::uint32_t mesh) const;
 
+    // Whether commit() makes a compact emissive mesh one light (LightType::
+    // Mesh: directions toward its bounding sphere) instead of a light per
+    // triangle: meshes of at least kMeshLightTriangles triangles whose area
+    // is at least kMeshLightFill of their bounding sphere's (a sphere-like
+    // body fills most of the cone it subtends). On unless set off; before
+    // commit. Measured on an emissive sphere of 16k triangles (bench/
+    // bench_emitters.cpp): relative variance a sample 0.36 -> ~0.01 at a
+    // fraction of the time (one closest hit, no light tree).
+    void set_mesh_lights(bool on);
+    static constexpr std::size_t kMeshLightTriangles = 64;
+    static constexpr double kMeshLightFill = 0.75;
+
     // Builds the acceleration structure and the emissive-triangle lights.
     void commit();
     bool committed() const { return committed_; }
 
     const GeometryScene& geometry() const { return geometry_; }
-    // Every light after commit: analytic ones first, then emissive triangles.
+    // Every light after commit: analytic ones first, then mesh lights, then
+    // emissive triangles.
     const std::vector<Light>& lights() const { return lights_; }
     std::size_t num_analytic_lights() const { return analytic_lights_; }
     // The shapes of every area light (rect, ellipse, emissive triangle) in
@@ -92,6 +106,8 @@ private:
     std::vector<Receiver> receivers_;  // per mesh; shorter: Lambert for the rest
     std::size_t analytic_lights_ = 0;
     double bounding_radius_ = 1;
+    bool mesh_lights_ = true;
+    std::vector<std::uint32_t> light_meshes_;  // the meshes drawn as mesh lights
     bool committed_ = false;
     mutable std::mutex selectors_mutex_;
     mutable std::unique_ptr<LightSelector> selectors_[2][3];  // [delta][kind]

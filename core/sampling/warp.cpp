@@ -69,6 +69,14 @@ Cone Cone::facing_disk(const Vec3& x, const Vec3& center, double radius) {
     return {dv / d, radius * radius / (hyp * (hyp + d))};
 }
 
+Cone Cone::around_sphere(const Vec3& x, const Vec3& center, double radius) {
+    const Vec3 dv = center - x;
+    const double d = length(dv);
+    const double s2 = std::min(1.0, (radius / d) * (radius / d));  // sin²θmax
+    // 1 − cos θmax = sin²/(1 + cos) without cancellation.
+    return {dv / d, s2 / (1.0 + std::sqrt(1.0 - s2))};
+}
+
 // The uniform disk (concentric) lifted to the cone: a disk point at radius ρ
 // goes to 1 − cos θ = ρ²(1 − cos θmax) along its own azimuth, which maps equal
 // disk areas to equal solid angles.

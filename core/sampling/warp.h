@@ -27,6 +27,9 @@ struct Cone {
     // The cone subtended from x by a disk of this radius facing x: a point light of
     // radius r (SPEC §4); half-angle atan(r/d).
     static Cone facing_disk(const Vec3& x, const Vec3& center, double radius);
+    // The cone of directions from x that meet a sphere (x outside it): half-angle
+    // asin(r/d).
+    static Cone around_sphere(const Vec3& x, const Vec3& center, double radius);
 
     double solid_angle() const { return 2.0 * kPi * one_minus_cos; }
     Vec3 sample(double u1, double u2) const;

@@ -87,8 +87,10 @@ void emitter_filter(const RTCFilterFunctionNArguments* args) {
     if (!q) return;
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
-        args->valid[i] = 0;
         const unsigned geometry = RTCHitN_geomID(args->hit, args->N, i);
+        // A mesh light's mesh: its hit is kept, as a mesh that does not emit.
+        if (geometry != q->candidates && q->mesh_lights[geometry].opaque) continue;
+        args->valid[i] = 0;
         const unsigned primitive = RTCHitN_primID(args->hit, args->N, i);
         if (geometry == q->candidates) {
             q->list(q->light_of[primitive]);
@@ -515,7 +517,8 @@ void GeometryScene::drop_emitter_candidates() {
 
 void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
                                            std::vector<std::uint32_t> light_of,
-                                           const std::vector<MeshTriangleLight>& mesh_lights) {
+                                           const std::vector<MeshTriangleLight>& mesh_lights,
+                                           const std::vector<std::uint32_t>& opaque_meshes) {
     drop_emitter_candidates();
     committed_ = false;
     // Every emissive mesh's triangles, ~0u where a triangle has no light.
@@ -550,6 +553,12 @@ void GeometryScene::set_emitter_candidates(const std::vector<float>& vertices,
             mesh_lights_[m] = {std::uint32_t(mesh_light_.size()), false};
             mesh_light_.insert(mesh_light_.end(), own, own + n);
         }
+    }
+    for (std::uint32_t m : opaque_meshes) {
+        if (m >= meshes_.size() || !meshes_[m].is_emissive())
+            throw std::invalid_argument("set_emitter_candidates: mesh " + std::to_string(m) +
+                                        " is not an emissive mesh");
+        mesh_lights_[m].opaque = true;
     }
     emitter_query_ = true;
     const std::size_t triangles = light_of.size();
@@ -596,8 +605,8 @@ std::optional<RayHit> GeometryScene::closest_hit_and_emitters(
     ctx.emitters = &q;
     rtcIntersect1(scene_, &ctx.context, &rh);
     count_rays(1);
-    // A hit Embree kept is on a mesh that does not emit: nothing past it
-    // was looked for.
+    // A hit Embree kept is on a mesh that does not emit, or on a mesh
+    // light's: nothing past it was looked for.
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
         complete = false;
         if (!(q.t < rh.ray.tfar)) return hit_of(rh);

@@ -175,9 +175,13 @@ public:
     struct MeshTriangleLight {
         std::uint32_t mesh = 0, triangle = 0, light = 0;
     };
+    // `opaque_meshes`: emissive meshes drawn as one light each (mesh lights):
+    // their triangles list no light, and a hit on one stops the traversal
+    // as a mesh that does not emit would.
     void set_emitter_candidates(const std::vector<float>& vertices,
                                 std::vector<std::uint32_t> light_of,
-                                const std::vector<MeshTriangleLight>& mesh_lights = {});
+                                const std::vector<MeshTriangleLight>& mesh_lights = {},
+                                const std::vector<std::uint32_t>& opaque_meshes = {});
     bool has_emitter_candidates() const { return emitter_query_; }
     // closest_hit(origin, direction, 0, ∞), and appended to `lights` (with
     // repeats, in no order) every emitter candidate the ray crosses up to
@@ -204,6 +208,7 @@ public:
     struct MeshLights {
         std::uint32_t first = 0;
         bool consecutive = false;
+        bool opaque = false;  // a mesh light's mesh (set_emitter_candidates)
     };
 
     // Rays handed to Embree since construction or the last reset, summed over

@@ -28,6 +28,7 @@ namespace {
 // that hides part of both from some receivers.
 void build_scene(Scene& scene) {
     add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 8, 16);
+    scene.set_mesh_lights(false);  // its triangles as lights: the paths under test
     scene.add_light(make_rect_light(Vec3(-0.15, -0.15, 1.8), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
                                     Vec3(20, 20, 20), false, kPi));
     scene.add_mesh(std::vector<Vec3>{{0.3, -1, 0.4}, {1, -1, 0.4}, {1, 1, 0.4}, {0.3, 1, 0.4}},
@@ -114,6 +115,7 @@ TEST_CASE("emitter fast paths with a world give the general path's estimates",
     for (int variant = 0; variant < 3; ++variant) {
         Scene scene;
         add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 8, 16);
+        scene.set_mesh_lights(false);  // its triangles as lights: the paths under test
         scene.add_mesh(
             std::vector<Vec3>{{0.3, -1, 0.4}, {1, -1, 0.4}, {1, 1, 0.4}, {0.3, 1, 0.4}},
             {{0, 1, 2}, {0, 2, 3}});

@@ -40,6 +40,7 @@ TEST_CASE("closest_hit_and_emitters: closest_hit's hit and the lights along the 
     Scene scene;
     testing::add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 8, 16);
     testing::add_emissive_sphere(scene, Vec3(0.1, 0, 2.2), 0.2, 6, 12);
+    scene.set_mesh_lights(false);  // the query lists their triangles' lights
     scene.add_light(make_rect_light(Vec3(-0.3, -0.3, 1.6), Vec3(0, 0.6, 0), Vec3(0.6, 0, 0),
                                     Vec3(5, 5, 5), false, kPi));
     scene.add_mesh(std::vector<Vec3>{{0.2, -1, 0.3}, {1, -1, 0.3}, {1, 1, 0.3}, {0.2, 1, 0.3}},

@@ -256,6 +256,7 @@ TEST_CASE("region branching kept between passes: a later pass shades as one that
     Scene scene;
     scene.add_mesh({{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}}, {{0, 1, 2}, {0, 2, 3}});
     testing::add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 24, 48, Vec3(3, 3, 3));
+    scene.set_mesh_lights(false);  // a light tree over its triangles
     scene.add_light(make_rect_light(Vec3(0.2, 0.05, 1.4), Vec3(0, 0.3, 0), Vec3(0.3, 0, 0),
                                     Vec3(40, 40, 40), false, kPi));
     scene.commit();
@@ -297,6 +298,7 @@ TEST_CASE("region branching's block is handed on to the next context, emptied", 
     Scene scene;
     scene.add_mesh({{-3, -3, 0}, {3, -3, 0}, {3, 3, 0}, {-3, 3, 0}}, {{0, 1, 2}, {0, 2, 3}});
     testing::add_emissive_sphere(scene, Vec3(0.2, 0.1, 0.6), 0.3, 12, 24, Vec3(3, 3, 3));
+    scene.set_mesh_lights(false);  // a light tree over its triangles
     scene.commit();
     const DirectLightingSettings s = light_and_bsdf("tree/solid-angle", 2, false, 7);
     constexpr std::size_t points = 4096;
