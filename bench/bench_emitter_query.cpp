@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
         scene.add_mesh(std::vector<Vec3>{{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}},
                        {{0, 1, 2}, {0, 2, 3}});
         testing::add_emissive_sphere(scene, kCentre, kRadius, stacks, slices);
+        scene.set_mesh_lights(false);  // its triangles as lights: the query lists them
         scene.commit();
         const GeometryScene& geometry = scene.geometry();
         const double inf = std::numeric_limits<double>::infinity();

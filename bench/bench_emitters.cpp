@@ -26,7 +26,9 @@
 // sample at its own position), --rounds N (4 unless given), --general (each
 // scene also without DirectLightingSettings::fast_paths, in the same run: a
 // family of its own, "… general"), --techniques A,B (those techniques, one
-// sample each a round, instead of the effect plan's: to compare selections).
+// sample each a round, instead of the effect plan's: to compare selections),
+// --per-triangle (emissive meshes as a light per triangle, never one mesh
+// light: Scene::set_mesh_lights(false); the light tree's scaling).
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -123,10 +125,11 @@ struct Timed {
     // extent: the side of the square of receivers about the origin.
     Timed(std::string family_, int emitters_, const std::function<void(Scene&)>& build,
           int grid, bool texels_, int rounds, bool fast_paths, double extent = 4.0,
-          const std::vector<Technique>& forced = {})
+          const std::vector<Technique>& forced = {}, bool mesh_lights = true)
         : family(std::move(family_) + (fast_paths ? "" : " general")), emitters(emitters_), texels(texels_), cell(extent / grid) {
         add_floor(scene);
         build(scene);
+        scene.set_mesh_lights(mesh_lights);
         const double c0 = cpu_seconds();
         scene.commit();  // the Embree scenes (meshes and emitter candidates)
         commit_ms = 1e3 * (cpu_seconds() - c0);
@@ -208,6 +211,7 @@ int main(int argc, char** argv) {
     int reps = 5, rounds = 4;
     bool texels = false, general = false;
     std::vector<Technique> forced;  // --techniques
+    bool mesh_lights = true;        // not --per-triangle
     for (int i = 1; i < argc; ++i) {
         if (std::strcmp(argv[i], "--quick") == 0) quick = true;
         else if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) only = argv[++i];
@@ -219,6 +223,7 @@ int main(int argc, char** argv) {
             rounds = std::max(1, std::atoi(argv[++i]));
         else if (std::strcmp(argv[i], "--texels") == 0) texels = true;
         else if (std::strcmp(argv[i], "--general") == 0) general = true;
+        else if (std::strcmp(argv[i], "--per-triangle") == 0) mesh_lights = false;
         else if (std::strcmp(argv[i], "--techniques") == 0 && i + 1 < argc) {
             std::string list = argv[++i];
             for (std::size_t start = 0; start <= list.size();) {
@@ -234,7 +239,7 @@ int main(int argc, char** argv) {
             }
         }
         else {
-            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|race|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general] [--techniques A,B]\n",
+            std::fprintf(stderr, "usage: %s [--quick] [--only sphere|shadowed|race|point|area] [--emitters N] [--reps N] [--texels] [--rounds N] [--general] [--techniques A,B] [--per-triangle]\n",
                          argv[0]);
             return 2;
         }
@@ -253,7 +258,7 @@ int main(int argc, char** argv) {
             if (wanted("sphere", 2 * slices * (stacks - 1)))
                 scenes.push_back(std::make_unique<Timed>(
                     "emissive sphere", 2 * slices * (stacks - 1),
-                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast, 4.0, forced));
+                    [&](Scene& s) { add_emissive_sphere(s, stacks, slices); }, grid, texels, rounds, fast, 4.0, forced, mesh_lights));
         // The sphere over an opaque plate that shadows half of the floor:
         // many light samples there see nothing (their integrand is 0).
         for (auto [stacks, slices] : spheres)
@@ -266,18 +271,18 @@ int main(int argc, char** argv) {
                                                      {0, 3, 0.8}},
                                    {{0, 1, 2}, {0, 2, 3}});
                     },
-                    grid, texels, rounds, fast, 4.0, forced));
+                    grid, texels, rounds, fast, 4.0, forced, mesh_lights));
         if (wanted("race", 16129))
             scenes.push_back(std::make_unique<Timed>("race mesh", 16129, testing::add_race_mesh,
-                                                     grid, texels, rounds, fast, 2.0, forced));
+                                                     grid, texels, rounds, fast, 2.0, forced, mesh_lights));
         for (int side : {1, 4, 16, 100})
             if (wanted("point", side * side))
                 scenes.push_back(std::make_unique<Timed>(
-                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced));
+                    "point lights", side * side, [&](Scene& s) { add_point_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced, mesh_lights));
         for (int side : {1, 4, 16, 100})
             if (wanted("area", side * side))
                 scenes.push_back(std::make_unique<Timed>(
-                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced));
+                    "area lights", side * side, [&](Scene& s) { add_area_grid(s, side); }, grid, texels, rounds, fast, 4.0, forced, mesh_lights));
     }
     // Repetitions interleaved over the scenes, the fastest of each kept: a
     // burst of load on the shared machine then slows one repetition of every

@@ -1,13 +1,16 @@
 """Emitter scaling against Cycles' own bake: time per texel-sample of omis and of
 Cycles on the same scenes, in one run.
 
-    bash scripts/blender_run.sh bench/bench_emitters_cycles.py [--families sphere,point,area]
+    bash scripts/blender_run.sh bench/bench_emitters_cycles.py [--families sphere,panel,point,area]
         [--max-emitters N] [--size N]
 
 Scenes (as bench/bench_emitters.cpp): a floor of 4 m with a size² float image,
-and an emissive UV sphere (radius 0.5 m at 1.5 m, 16 to ~100k triangles), or a
-grid over [−2, 2]² at 1 m of point lights or of 5 cm area lights facing down
-(1 to 10k), total power fixed.
+and an emissive UV sphere (radius 0.5 m at 1.5 m, 16 to ~100k triangles; from
+64 triangles omis draws it as one mesh light, Scene::set_mesh_lights), an
+emissive panel (a 1 m square at 1.5 m, subdivided into 2 to ~100k triangles:
+flat, so each triangle stays a light of omis' light tree), or a grid over
+[−2, 2]² at 1 m of point lights or of 5 cm area lights facing down (1 to 10k),
+total power fixed.
 
 Per scene and renderer, the operator's time is fitted as t0 + k·spp from two
 bakes (Cycles: 2 and 32 spp; omis: 4 and 64 samples per texel, the effect
@@ -50,6 +53,14 @@ def sphere(stacks, slices):
     def build():
         bpy.ops.mesh.primitive_uv_sphere_add(segments=slices, ring_count=stacks, radius=0.5,
                                              location=(0, 0, 1.5))
+        bpy.context.active_object.data.materials.append(U.emission_material("Glow"))
+    return build
+
+
+def panel(cuts):
+    def build():
+        bpy.ops.mesh.primitive_grid_add(x_subdivisions=cuts, y_subdivisions=cuts, size=1.0,
+                                        location=(0, 0, 1.5))
         bpy.context.active_object.data.materials.append(U.emission_material("Glow"))
     return build
 
@@ -107,7 +118,7 @@ def omis(objects):
 def main():
     argv = script_args()
     parser = argparse.ArgumentParser()
-    parser.add_argument("--families", default="sphere,point,area")
+    parser.add_argument("--families", default="sphere,panel,point,area")
     parser.add_argument("--max-emitters", type=int, default=100000)
     parser.add_argument("--size", type=int, default=64)
     args = parser.parse_args(argv)
@@ -116,6 +127,10 @@ def main():
     if "sphere" in families:
         for stacks, slices in ((2, 8), (8, 16), (20, 40), (64, 128), (158, 316)):
             scenes.append(("emissive sphere", 2 * slices * (stacks - 1), sphere(stacks, slices)))
+    if "panel" in families:
+        # Blender 3.4's grid of c subdivisions has c² quads.
+        for cuts in (1, 3, 10, 90, 224):
+            scenes.append(("emissive panel", 2 * cuts * cuts, panel(cuts)))
     for kind in ("point", "area"):
         if kind in families:
             for side in (1, 4, 16, 100):

@@ -17,6 +17,7 @@ namespace omis {
 // meshes): directions toward its bounding sphere, its radiance where the
 // first hit along them is on the mesh.
 enum class LightType { Rect, Ellipse, Triangle, Point, Spot, Sun, World, Mesh };
+constexpr int kLightTypes = 8;  // how many LightType values
 const char* light_type_name(LightType type);
 
 // How a light technique draws a direction toward the light it has chosen — the

@@ -13,7 +13,7 @@ namespace omis {
 
 struct EffectPlan {
     // What the scene holds.
-    int lights_by_type[7] = {};  // indexed by LightType
+    int lights_by_type[kLightTypes] = {};  // indexed by LightType
     int integrated_lights = 0;   // non-delta lights: the MIS system's business
     int delta_lights = 0;        // one shadow ray each, outside MIS
     // Some geometry could occlude a light from a point shaded (not where the
