@@ -132,6 +132,10 @@ normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
         .def("set_light_flags", &Scene::set_light_flags, py::arg("light"),
              py::arg("cast_shadow") = true, py::arg("visible_to_bsdf") = true,
              "Blender's cycles.cast_shadow and use_multiple_importance_sampling for one light.")
+        .def("set_mesh_lights", &Scene::set_mesh_lights, py::arg("enabled"),
+             "Whether commit draws a compact emissive mesh (at least 64 triangles, its area at "
+             "least 3/4 of its bounding sphere's) as one light toward its bounding sphere "
+             "instead of a light per triangle (default True). Before commit.")
         .def("set_receiver", &Scene::set_receiver, py::arg("mesh"), py::arg("model"),
              py::arg("roughness") = 0.0,
              "The mesh's diffuse closure when baked, as Cycles' Diffuse bake evaluates it: "

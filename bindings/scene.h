@@ -190,6 +190,12 @@ public:
         raise_if_pending();
     }
 
+    void set_mesh_lights(bool enabled) {
+        omisGetError(nullptr);  // void call: start from a clean error state
+        omisSetMeshLights(get(), enabled);
+        raise_if_pending();
+    }
+
     // "lambert", "principled" (Principled BSDF's diffuse) or "oren-nayar"
     // (Diffuse BSDF): the closure a mesh has when baked (render/receiver.h).
     void set_receiver(long long mesh, const std::string& model, double roughness) {

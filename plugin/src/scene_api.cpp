@@ -273,6 +273,14 @@ OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castSh
     });
 }
 
+OMIS_API void omisSetMeshLights(OMISScene scene, bool enabled) {
+    guarded_void([&] {
+        auto* s = checked(scene, "scene");
+        auto lock = s->lock_for_build("omisSetMeshLights");
+        s->scene.set_mesh_lights(enabled);
+    });
+}
+
 OMIS_API void omisSetMeshReceiver(OMISScene scene, unsigned int mesh, OMISReceiver receiver,
                                   double roughness) {
     guarded_void([&] {

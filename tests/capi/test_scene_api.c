@@ -151,6 +151,8 @@ static void test_errors(void) {
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
     omisSetLightFlags(scene, 0, false, true);
     CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
+    omisSetMeshLights(scene, false);
+    CHECK(error_is(OMIS_ERROR_INVALID_OPERATION, "committed"));
 
     CHECK(omisGetEffectPlan(scene, "nope", samples, text, sizeof text) == 0);
     CHECK(error_is(OMIS_ERROR_INVALID_ARGUMENT, "'nope'"));

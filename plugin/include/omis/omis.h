@@ -213,6 +213,11 @@ OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]);
  * (false: the `bsdf` technique does not see the light). Before commit only. */
 OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
                                      bool visibleToBsdf);
+/* Whether commit draws a compact emissive mesh (at least 64 triangles whose
+ * area is at least 3/4 of their bounding sphere's: a sphere-like body) as one
+ * light, toward its bounding sphere, instead of a light per triangle; on by
+ * default. Off gives the per-triangle light tree. Before commit only. */
+OMIS_API void omisSetMeshLights(OMISScene scene, bool enabled);
 
 /* The diffuse closure of a mesh's surface when it is baked, evaluated as
  * Cycles 3.4's Diffuse bake does (viewed along the normal, divided by the
