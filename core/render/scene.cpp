@@ -90,8 +90,16 @@ std::vector<Light> mesh_lights_of(const GeometryScene& geometry,
         for (const Vec3& v : t.vertices)
             radius2[t.mesh] = std::max(radius2[t.mesh], dot(v - centre, v - centre));
     }
+    // Mesh lights are unshaped (each direction tests every one's sphere):
+    // the most triangles first, up to kMostMeshLights; the rest keep a light
+    // per triangle, which the light tree and the emitter query scale to.
+    std::vector<std::uint32_t> order(meshes);
+    for (std::uint32_t m = 0; m < meshes; ++m) order[m] = m;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return count[a] > count[b]; });
     std::vector<Light> lights;
-    for (std::uint32_t m = 0; m < meshes; ++m) {
+    for (std::uint32_t m : order) {
+        if (lights.size() == Scene::kMostMeshLights) break;
         if (count[m] < Scene::kMeshLightTriangles || !(radius2[m] > 0)) continue;
         const Vec3 centre = (lo[m] + hi[m]) * 0.5;
         const double span = std::max({std::abs(centre.x), std::abs(centre.y), std::abs(centre.z)});

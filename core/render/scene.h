@@ -44,11 +44,13 @@ public:
     // triangle: meshes of at least kMeshLightTriangles triangles whose area
     // is at least kMeshLightFill of their bounding sphere's (a sphere-like
     // body fills most of the cone it subtends). On unless set off; before
-    // commit. Measured on an emissive sphere of 16k triangles (bench/
+    // commit. At most kMostMeshLights meshes, the largest (each direction
+    // tests every mesh light). Measured on an emissive sphere of 16k triangles (bench/
     // bench_emitters.cpp): relative variance a sample 0.36 -> ~0.01 at a
     // fraction of the time (one closest hit, no light tree).
     void set_mesh_lights(bool on);
     static constexpr std::size_t kMeshLightTriangles = 64;
+    static constexpr std::size_t kMostMeshLights = 8;
     static constexpr double kMeshLightFill = 0.75;
 
     // Builds the acceleration structure and the emissive-triangle lights.
