@@ -447,6 +447,13 @@ bool mesh_light_draws_cone(const Light& l, const Vec3& x) {
     return dot(d, d) > l.radius * l.radius * (1 + kMeshConeMargin) * (1 + kMeshConeMargin);
 }
 
+bool mesh_light_along(const Light& l, const Vec3& x, const Vec3& w) {
+    if (!mesh_light_draws_cone(l, x)) return true;
+    const Vec3 d = l.position - x;
+    const double along = dot(d, w);
+    return along > 0 && dot(d, d) - along * along <= l.radius * l.radius;
+}
+
 Emitted triangle_emitted(const Light& l, const Vec3& w, double distance) {
     return Emitted{planar_radiance(l, w), distance};
 }

@@ -106,6 +106,10 @@ Light make_mesh_light(std::uint32_t mesh, const Vec3& centre, double radius, dou
 // Whether a mesh light draws its bounding sphere's cone at x (x outside the
 // sphere), or else the cosine hemisphere about n.
 bool mesh_light_draws_cone(const Light& light, const Vec3& x);
+// Whether w from x may meet a mesh light's mesh: it meets the bounding
+// sphere (the whole of its cone, not the disk facing x that a point light's
+// radius makes), or x is inside it (or within the cone's margin).
+bool mesh_light_along(const Light& light, const Vec3& x, const Vec3& w);
 
 // Rec. 709 luminance, the scalar used for selection weights and noise.
 inline double luminance(const Vec3& rgb) {

@@ -1079,8 +1079,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     for (std::uint32_t l : lights_along(x, w)) {
         const Light& light = p_.scene.lights()[l];
         if (light.type == LightType::Mesh) {
-            meshes = meshes || (luminance(light.emission) > 0 &&
-                                SphereLight{light.position, light.radius}.intersect(x, w));
+            meshes = meshes || (luminance(light.emission) > 0 && mesh_light_along(light, x, w));
             continue;
         }
         const auto e = emitted_radiance(light, x, w);
