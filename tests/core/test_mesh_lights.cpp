@@ -24,6 +24,7 @@
 #include "support/emissive_sphere.h"
 #include "support/lighting_settings.h"
 #include "support/point_copies.h"
+#include "support/square_footprint.h"
 
 using namespace omis;
 using omis::testing::add_emissive_sphere;
@@ -639,5 +640,132 @@ TEST_CASE("mesh lights: much less variance than their triangles", "[direct][mesh
                                   b.standard_error * b.standard_error));
         // ... at a fraction of the variance.
         CHECK(vb >= kLeastRatio * va);
+    }
+}
+
+// A bake's texels: each sample draws its own position in the texel's
+// footprint, and the cone or the cosine hemisphere there; a texel's later
+// passes continue its sequences and reuse its tables; shadowed_draws probes
+// the footprint's centre first. The same comparison as above (5σ, the
+// copies' standard errors), with T texels (one stream each) of one footprint
+// as T independent estimates, over two passes of 8 and 24 rounds.
+namespace {
+
+struct Mean {
+    double mean = 0, standard_error = 0;
+};
+
+Mean footprint_copies(const Scene& scene, const DirectLightingSettings& settings,
+                      const testing::SquareFootprint& footprint, int copies) {
+    LightingContext context(scene, settings);
+    PointLighting shader(context);
+    std::vector<double> v;
+    for (int c = 0; c < copies; ++c) {
+        double first[3], second[3];
+        shader.shade(std::uint64_t(c), 0, 8, footprint.centre(), &footprint, first, nullptr);
+        shader.shade(std::uint64_t(c), 8, 24, footprint.centre(), &footprint, second, nullptr);
+        v.push_back((8 * first[1] + 24 * second[1]) / 32);
+    }
+    Mean m;
+    for (double x : v) m.mean += x / copies;
+    double variance = 0;
+    for (double x : v) variance += (x - m.mean) * (x - m.mean) / (copies - 1);
+    m.standard_error = std::sqrt(variance / copies);
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("mesh lights light as their triangles: texel footprints over passes",
+          "[direct][mesh_lights]") {
+    constexpr int kTexels = 512;
+    struct Case {
+        const char* what;
+        bool plate;  // the plate of the shadowed scene, over the resting sphere
+        testing::SquareFootprint footprint;
+    };
+    // The resting sphere (r 0.4 about (0, 0, 0.4)); the cone's margin ends
+    // ~6 mm from the contact, inside the first footprint. The plate at
+    // z = 0.85 over x ≥ 0.3 hides part of the sphere from the third.
+    const Case cases[] = {
+        {"1 cm texel across the cosine hemisphere's edge", false,
+         testing::SquareFootprint(Vec3(0.006, 0.001, 0), 0.005)},
+        {"10 cm texel beside the contact", false,
+         testing::SquareFootprint(Vec3(0.15, -0.05, 0), 0.05)},
+        {"20 cm texel in the plate's penumbra", true,
+         testing::SquareFootprint(Vec3(0.8, 0, 0), 0.1)},
+    };
+    std::uint64_t seed = 5000;
+    for (const Case& c : cases) {
+        Scene mesh, triangles;
+        for (Scene* s : {&mesh, &triangles}) {
+            add_floor(*s);
+            add_emissive_sphere(*s, Vec3(0, 0, 0.4), 0.4, 12, 24, Vec3(2, 2, 2));
+            if (c.plate)
+                s->add_mesh(std::vector<Vec3>{{0.3, -3, 0.85}, {3, -3, 0.85}, {3, 3, 0.85},
+                                              {0.3, 3, 0.85}},
+                            {{0, 1, 2}, {0, 2, 3}});
+        }
+        triangles.set_mesh_lights(false);
+        mesh.commit();
+        triangles.commit();
+        for (const auto& names : {std::vector<std::string>{"power/solid-angle", "bsdf"},
+                                  std::vector<std::string>{"tree/solid-angle"}})
+            for (int shadowed_draws : {1, 4}) {
+                DirectLightingSettings s = testing::lighting_settings(
+                    names, std::vector<int>(names.size(), 2), 1, Strategy::Balance, 0);
+                s.shadowed_draws = shadowed_draws;
+                s.seed = seed++;
+                const Mean a = footprint_copies(mesh, s, c.footprint, kTexels);
+                s.seed = seed++;
+                const Mean b = footprint_copies(triangles, s, c.footprint, kTexels);
+                INFO(c.what << ", " << names.front() << " and " << names.size() - 1
+                            << " more, shadowed_draws " << shadowed_draws << ": mesh light "
+                            << a.mean << " ± " << a.standard_error << ", triangles " << b.mean
+                            << " ± " << b.standard_error);
+                CHECK(std::isfinite(a.mean));
+                CHECK(std::isfinite(b.mean));
+                CHECK(b.standard_error > 0);
+                CHECK(std::abs(a.mean - b.mean) <=
+                      kSigmas * std::sqrt(a.standard_error * a.standard_error +
+                                          b.standard_error * b.standard_error));
+            }
+    }
+}
+
+// shadowed_draws' probe (direct_lighting.cpp, centre_in_shadow) weighs and
+// traces each light's middle point: a mesh light's is its cone's axis (the
+// cosine's normal inside its sphere), seen where the closest hit is on its
+// mesh. Two emissive spheres over the floor (the plan then draws uniformly
+// and asks for the probe): a texel between them that sees both is drawn
+// once a count, one under a plate that hides both four times.
+TEST_CASE("mesh lights: shadowed_draws' probe sees them", "[direct][mesh_lights]") {
+    for (bool plate : {false, true}) {
+        Scene scene;
+        add_emissive_sphere(scene, Vec3(0, 0, 1), 0.3, 16, 32, Vec3(2, 2, 2));
+        add_emissive_sphere(scene, Vec3(1, 0, 1), 0.3, 16, 32, Vec3(2, 2, 2));
+        add_floor(scene);
+        if (plate)
+            scene.add_mesh(std::vector<Vec3>{{-0.5, -0.5, 0.3}, {1.5, -0.5, 0.3},
+                                             {1.5, 0.5, 0.3}, {-0.5, 0.5, 0.3}},
+                           {{0, 1, 2}, {0, 2, 3}});
+        scene.commit();
+        REQUIRE(count_of(scene, LightType::Mesh) == 2);
+        DirectLightingSettings s;
+        int shadowed_draws = 0;
+        default_techniques(scene, s.techniques, s.samples, &shadowed_draws);
+        CHECK(shadowed_draws == kShadowedDraws);
+        s.shadowed_draws = kShadowedDraws;
+        LightingContext context(scene, s);
+        PointLighting shader(context);
+        const testing::SquareFootprint texel(Vec3(0.5, 0, 0), 0.05);
+        double value[3];
+        shader.shade(0, 0, 4, texel.centre(), &texel, value, nullptr);
+        INFO((plate ? "under the plate" : "in the open") << ": " << value[1]);
+        CHECK(shader.draws_per_count() == (plate ? kShadowedDraws : 1));
+        if (plate)
+            CHECK(value[1] == 0);
+        else
+            CHECK(value[1] > 0);
     }
 }
