@@ -140,7 +140,8 @@ bool world_seen_through_emitters(const Scene& scene) {
     for (const Light& l : scene.lights()) {
         if (l.is_delta()) continue;
         if (!l.cast_shadow || !l.visible_to_bsdf) return false;
-        if (l.type != LightType::Triangle) continue;
+        // Emissive meshes: their triangles, or one mesh light (two-sided).
+        if (l.type != LightType::Triangle && l.type != LightType::Mesh) continue;
         triangles = true;
         if (!(l.emission.x >= world->emission.x && l.emission.y >= world->emission.y &&
               l.emission.z >= world->emission.z && l.two_sided))
