@@ -54,14 +54,15 @@ void add_emissive_grid(Scene& scene, int n, double z) {
     scene.add_mesh(p, t, Vec3(2, 2, 2));
 }
 
-// A closed box of 12 triangles, emissive.
-void add_emissive_box(Scene& scene, const Vec3& lo, const Vec3& hi) {
+// A closed box of 12 triangles, emitting `emission` if given.
+void add_box(Scene& scene, const Vec3& lo, const Vec3& hi,
+             std::optional<Vec3> emission = Vec3(2, 2, 2)) {
     std::vector<Vec3> c;
     for (int i = 0; i < 8; ++i)
         c.push_back({i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z});
     scene.add_mesh(c, {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}},
-                   Vec3(2, 2, 2));
+                   emission);
 }
 
 }  // namespace
@@ -115,7 +116,7 @@ TEST_CASE("mesh lights: which emissive meshes become one", "[lights][mesh_lights
     SECTION("a flat grid of 200 triangles and a box of 12 stay per-triangle") {
         Scene scene;
         add_emissive_grid(scene, 10, 1.5);
-        add_emissive_box(scene, Vec3(-1, -1, 0.2), Vec3(-0.5, -0.5, 0.7));
+        add_box(scene, Vec3(-1, -1, 0.2), Vec3(-0.5, -0.5, 0.7));
         add_emissive_sphere(scene, Vec3(2, 0, 1), 0.3, 8, 16);  // 224 triangles: one light
         scene.commit();
         CHECK(count_of(scene, LightType::Mesh) == 1);
@@ -768,4 +769,72 @@ TEST_CASE("mesh lights: shadowed_draws' probe sees them", "[direct][mesh_lights]
         else
             CHECK(value[1] > 0);
     }
+}
+
+// A world among emitters (effect_plan.cpp, world_seen_through_emitters): it
+// is seen through the emitters by `bsdf` only where every emitter is at least
+// as bright as the world (else the emitters' part L_e − L_w would be
+// negative); a mesh light is such an emitter as its triangles are. A minor
+// world (the plan's world_by_bsdf) among few lights: the sphere as a mesh
+// light, a bright emissive quad (two triangle lights) and an opaque box.
+namespace {
+
+void build_world_scene(Scene& scene, double sphere_radiance, bool quad = true) {
+    add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 12, 24, Vec3(1, 1, 1) * sphere_radiance);
+    if (quad)
+        scene.add_mesh(std::vector<Vec3>{{0.6, -0.2, 0.9}, {1.0, -0.2, 0.9}, {1.0, 0.2, 0.9},
+                                         {0.6, 0.2, 0.9}},
+                       {{0, 1, 2}, {0, 2, 3}}, Vec3(6, 6, 6));
+    add_box(scene, Vec3(-1.2, -0.2, 0.3), Vec3(-0.8, 0.2, 0.6), std::nullopt);
+    scene.add_light(make_world_light(Vec3(0.1, 0.1, 0.1)));
+}
+
+}  // namespace
+
+TEST_CASE("mesh lights: the world is seen through them only where they outshine it",
+          "[direct][mesh_lights][world]") {
+    struct Case {
+        double sphere_radiance;
+        bool quad;
+    };
+    for (const Case c : {Case{0.05, true}, Case{3.0, true}, Case{3.0, false}}) {
+        INFO("sphere radiance " << c.sphere_radiance << ", world 0.1"
+                                << (c.quad ? ", a quad" : ""));
+        Scene scene;
+        build_world_scene(scene, c.sphere_radiance, c.quad);
+        scene.commit();
+        REQUIRE(count_of(scene, LightType::Mesh) == 1);
+        std::vector<Technique> techniques;
+        std::vector<int> samples;
+        default_techniques(scene, techniques, samples);
+        const EffectPlan plan = plan_effects(scene, techniques, samples);
+        REQUIRE(plan.world_by_bsdf);
+        CHECK(plan.world_through_emitters == (c.sphere_radiance >= 0.1));
+    }
+}
+
+// The world seen through a mesh light (its part by `bsdf` wherever no opaque
+// surface is hit first, the mesh's L_e − L_w by the light techniques) or
+// behind a dim one: unbiased as with its triangles (whose plan, among many
+// lights, does not see the world through them).
+TEST_CASE("mesh lights light as their triangles: with a world", "[direct][mesh_lights][world]") {
+    const std::vector<Shading> receivers = {
+        {"under the sphere", {0, 0, 0}, kUp},
+        {"under the quad", {0.8, 0, 0.3}, kUp},
+        {"beside the box", {-0.6, 0.1, 0.2}, kUp},
+        {"under the box", {-1, 0, 0.1}, kUp},
+        {"near the sphere's underside", {0.3, 0.2, 0.55}, kUp},
+        {"inside the sphere", {0, 0, 1}, normalize(Vec3(0.2, 0, 1))},
+        {"beside the sphere, facing it", {0.6, 0, 1}, Vec3(-1, 0, 0)},
+        {"2 m away", {2, 0, 0}, kUp},
+    };
+    std::uint64_t seed = 6000;
+    for (double sphere_radiance : {0.05, 3.0})
+        for (bool quad : {true, false}) {
+            INFO("sphere radiance " << sphere_radiance << ", world 0.1"
+                                    << (quad ? ", a quad" : ""));
+            check_as_triangles(
+                [&](Scene& s) { build_world_scene(s, sphere_radiance, quad); }, receivers, seed);
+            seed += 1000;
+        }
 }
