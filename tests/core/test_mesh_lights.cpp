@@ -652,11 +652,7 @@ TEST_CASE("mesh lights: much less variance than their triangles", "[direct][mesh
 // as T independent estimates, over two passes of 8 and 24 rounds.
 namespace {
 
-struct Mean {
-    double mean = 0, standard_error = 0;
-};
-
-Mean footprint_copies(const Scene& scene, const DirectLightingSettings& settings,
+testing::MeanAndError footprint_copies(const Scene& scene, const DirectLightingSettings& settings,
                       const testing::SquareFootprint& footprint, int copies) {
     LightingContext context(scene, settings);
     PointLighting shader(context);
@@ -667,12 +663,7 @@ Mean footprint_copies(const Scene& scene, const DirectLightingSettings& settings
         shader.shade(std::uint64_t(c), 8, 24, footprint.centre(), &footprint, second, nullptr);
         v.push_back((8 * first[1] + 24 * second[1]) / 32);
     }
-    Mean m;
-    for (double x : v) m.mean += x / copies;
-    double variance = 0;
-    for (double x : v) variance += (x - m.mean) * (x - m.mean) / (copies - 1);
-    m.standard_error = std::sqrt(variance / copies);
-    return m;
+    return testing::mean_and_error(v);
 }
 
 }  // namespace
@@ -717,9 +708,9 @@ TEST_CASE("mesh lights light as their triangles: texel footprints over passes",
                     names, std::vector<int>(names.size(), 2), 1, Strategy::Balance, 0);
                 s.shadowed_draws = shadowed_draws;
                 s.seed = seed++;
-                const Mean a = footprint_copies(mesh, s, c.footprint, kTexels);
+                const testing::MeanAndError a = footprint_copies(mesh, s, c.footprint, kTexels);
                 s.seed = seed++;
-                const Mean b = footprint_copies(triangles, s, c.footprint, kTexels);
+                const testing::MeanAndError b = footprint_copies(triangles, s, c.footprint, kTexels);
                 INFO(c.what << ", " << names.front() << " and " << names.size() - 1
                             << " more, shadowed_draws " << shadowed_draws << ": mesh light "
                             << a.mean << " ± " << a.standard_error << ", triangles " << b.mean
