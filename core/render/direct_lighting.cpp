@@ -420,7 +420,8 @@ struct PointLighting::Impl {
     std::optional<Unoccluded> light_unoccluded(std::uint32_t l, const Vec3& x, const Vec3& n,
                                                const Vec3& w) const;
     // Whether a shadow ray from x along w meets something before light l's
-    // emitting point `distance` away (false where no shadow rays are traced).
+    // emitting point `distance` away (false where no shadow rays are traced);
+    // for a mesh light, whether the closest hit is off its mesh.
     bool light_occluded(std::uint32_t l, const Vec3& x, const Vec3& ng, const Vec3& w,
                         double distance);
     // Starts reading the first two cache lines of light l's record, all that
@@ -1262,19 +1263,6 @@ PointLighting::Impl::Integrand PointLighting::Impl::light_integrand(std::uint32_
                                                                     const Vec3& ng,
                                                                     const Vec3& w) {
     Integrand f;
-    const Light& light = p_.scene.lights()[l];
-    if (light.type == LightType::Mesh) {
-        // Seen where the closest hit is on its mesh.
-        const double cos_theta = dot(n, w);
-        if (!(cos_theta > 0)) return f;
-        ++counters.rays;
-        const auto hit = p_.scene.geometry().closest_hit(
-            offset_ray_origin(x, ng, w), w, 0, std::numeric_limits<double>::infinity());
-        if (!hit || hit->mesh != light.mesh) return f;
-        (light.visible_to_bsdf ? f.main : f.hidden) =
-            light.emission * receiver_cosine_factor(p_.settings.receiver, cos_theta);
-        return f;
-    }
     const auto u = light_unoccluded(l, x, n, w);
     if (!u || light_occluded(l, x, ng, w, u->distance)) return f;
     (p_.scene.lights()[l].visible_to_bsdf ? f.main : f.hidden) = u->radiance * u->cosine_factor;
@@ -1285,7 +1273,15 @@ std::optional<PointLighting::Impl::Unoccluded> PointLighting::Impl::light_unoccl
     std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& w) const {
     const double cos_theta = dot(n, w);
     if (!(cos_theta > 0)) return std::nullopt;
-    const auto e = emitted_radiance(p_.scene.lights()[l], x, w);
+    const Light& light = p_.scene.lights()[l];
+    if (light.type == LightType::Mesh) {
+        // Its emission wherever w may meet its mesh: light_occluded then
+        // tells whether the closest hit is on it.
+        if (!mesh_light_along(light, x, w) || !(luminance(light.emission) > 0)) return std::nullopt;
+        return Unoccluded{light.emission, receiver_cosine_factor(p_.settings.receiver, cos_theta),
+                          std::numeric_limits<double>::infinity()};
+    }
+    const auto e = emitted_radiance(light, x, w);
     if (!e || !(luminance(e->radiance) > 0)) return std::nullopt;
     return Unoccluded{e->radiance, receiver_cosine_factor(p_.settings.receiver, cos_theta),
                       e->distance};
@@ -1294,6 +1290,14 @@ std::optional<PointLighting::Impl::Unoccluded> PointLighting::Impl::light_unoccl
 bool PointLighting::Impl::light_occluded(std::uint32_t l, const Vec3& x, const Vec3& ng,
                                          const Vec3& w, double distance) {
     const Light& light = p_.scene.lights()[l];
+    if (light.type == LightType::Mesh) {
+        // Seen where the closest hit is on its mesh (its mesh is the
+        // emitter: a ray is traced whatever the plan says of shadows).
+        ++counters.rays;
+        const auto hit = p_.scene.geometry().closest_hit(offset_ray_origin(x, ng, w), w, 0,
+                                                         std::numeric_limits<double>::infinity());
+        return !hit || hit->mesh != light.mesh;
+    }
     if (!p_.plan.shadow_rays || !light.cast_shadow) return false;
     // Up to the emitting point; a triangle's own surface (or a coplanar
     // neighbour at its depth) does not shadow it, as in integrand().

@@ -24,6 +24,7 @@
 #include "support/emissive_sphere.h"
 #include "support/lighting_settings.h"
 #include "support/point_copies.h"
+#include "support/square_footprint.h"
 
 using namespace omis;
 using omis::testing::add_emissive_sphere;
@@ -53,14 +54,15 @@ void add_emissive_grid(Scene& scene, int n, double z) {
     scene.add_mesh(p, t, Vec3(2, 2, 2));
 }
 
-// A closed box of 12 triangles, emissive.
-void add_emissive_box(Scene& scene, const Vec3& lo, const Vec3& hi) {
+// A closed box of 12 triangles, emitting `emission` if given.
+void add_box(Scene& scene, const Vec3& lo, const Vec3& hi,
+             std::optional<Vec3> emission = Vec3(2, 2, 2)) {
     std::vector<Vec3> c;
     for (int i = 0; i < 8; ++i)
         c.push_back({i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z});
     scene.add_mesh(c, {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}},
-                   Vec3(2, 2, 2));
+                   emission);
 }
 
 }  // namespace
@@ -114,7 +116,7 @@ TEST_CASE("mesh lights: which emissive meshes become one", "[lights][mesh_lights
     SECTION("a flat grid of 200 triangles and a box of 12 stay per-triangle") {
         Scene scene;
         add_emissive_grid(scene, 10, 1.5);
-        add_emissive_box(scene, Vec3(-1, -1, 0.2), Vec3(-0.5, -0.5, 0.7));
+        add_box(scene, Vec3(-1, -1, 0.2), Vec3(-0.5, -0.5, 0.7));
         add_emissive_sphere(scene, Vec3(2, 0, 1), 0.3, 8, 16);  // 224 triangles: one light
         scene.commit();
         CHECK(count_of(scene, LightType::Mesh) == 1);
@@ -284,11 +286,12 @@ TEST_CASE("mesh lights: which directions may see the mesh", "[lights][mesh_light
 // standard error; the two builds use different seeds, so their means are
 // independent and a − b has standard error √(σa² + σb²).
 //
-// kSigmas = 5: each scene compares 10–13 receivers under 9 configurations,
-// ~390 comparisons in all. With σ measured from 256 copies, a − b over its
+// kSigmas = 5: each scene compares 10–13 receivers under 11 configurations,
+// ~470 comparisons in all. With σ measured from 256 copies, a − b over its
 // standard error follows roughly Student's t with ≥ 250 degrees of freedom,
 // whose two-sided tail beyond 5 is ~1e-6: ~0.05 % that any of them misses
-// by chance (measured: the 387 z-scores have mean −0.06, spread 1.08). The estimates are not all normal (a few heavy-tailed per-
+// by chance (measured: the 471 z-scores have mean −0.04, spread 1.07, the
+// largest 3.7). The estimates are not all normal (a few heavy-tailed per-
 // triangle estimates near the sphere), which 5 rather than 4 also leaves
 // room for. A bias shows where it exceeds 5 standard errors at one receiver,
 // or, smaller but shared by many, in the aggregate below.
@@ -333,6 +336,10 @@ const std::vector<Config>& configs() {
                 c.push_back({{}, {}, s, fast, rounds});
                 c.push_back({{"power/area", "bsdf"}, {4, 4}, s, fast, rounds});
             }
+        // The light tree's and the unoccluded irradiance's weights (a mesh
+        // light's bounds and irradiance are its bounding sphere's).
+        c.push_back({{"tree/solid-angle", "bsdf"}, {4, 4}, Strategy::Balance, true});
+        c.push_back({{"unoccluded/solid-angle", "bsdf"}, {4, 4}, Strategy::Balance, true});
         // One light technique: each sample estimates its own light's part
         // (direct_lighting.cpp, light_integrand) where no triangle lights are.
         c.push_back({{"power/solid-angle"}, {8}, Strategy::Balance, true});
@@ -451,6 +458,26 @@ Vec3 between_face_and_sphere(const Vec3& c, double r) {
                         std::cos(theta));
 }
 
+// A 12 × 24 UV sphere of radiance 2 over the floor, alone: the two builds
+// against each other and each against the exact value (its mesh is mesh 0).
+void check_sphere_over_floor(const Vec3& c, double r, const std::vector<Shading>& receivers,
+                             std::uint64_t seed) {
+    check_as_triangles(
+        [&](Scene& s) {
+            add_emissive_sphere(s, c, r, 12, 24, Vec3(2, 2, 2));
+            add_floor(s);
+        },
+        receivers, seed, 0);
+}
+
+// Whether that sphere's mesh light draws the cosine hemisphere at x.
+bool draws_cosine(const Vec3& c, double r, const Vec3& x) {
+    Scene probe;
+    add_emissive_sphere(probe, c, r, 12, 24);
+    probe.commit();
+    return !mesh_light_draws_cone(probe.lights()[0], x);
+}
+
 }  // namespace
 
 TEST_CASE("mesh lights light as their triangles: a sphere over a floor",
@@ -474,18 +501,9 @@ TEST_CASE("mesh lights light as their triangles: a sphere over a floor",
         {"between a face and the bounding sphere, edge-on",
          between_face_and_sphere(c, r), normalize(Vec3(0, 0.3, 1))},
     };
-    Scene probe;
-    add_emissive_sphere(probe, c, r, 12, 24);
-    probe.commit();
-    REQUIRE_FALSE(mesh_light_draws_cone(probe.lights()[0], receivers[10].x));
-    REQUIRE_FALSE(mesh_light_draws_cone(probe.lights()[0], receivers[11].x));
-    REQUIRE_FALSE(mesh_light_draws_cone(probe.lights()[0], receivers[12].x));
-    check_as_triangles(
-        [&](Scene& s) {
-            add_emissive_sphere(s, c, r, 12, 24, Vec3(2, 2, 2));
-            add_floor(s);
-        },
-        receivers, 1000, 0);
+    for (int inside : {10, 11, 12}) REQUIRE(draws_cosine(c, r, receivers[inside].x));
+    REQUIRE_FALSE(draws_cosine(c, r, receivers[9].x));
+    check_sphere_over_floor(c, r, receivers, 1000);
 }
 
 TEST_CASE("mesh lights light as their triangles: a sphere resting on the floor",
@@ -507,18 +525,10 @@ TEST_CASE("mesh lights light as their triangles: a sphere resting on the floor",
         {"3 m from the contact", {-3, 0, 0}, kUp},
         {"10 m from the contact", {10, 0, 0}, kUp},
     };
-    Scene probe;
-    add_emissive_sphere(probe, c, r, 12, 24);
-    probe.commit();
-    REQUIRE_FALSE(mesh_light_draws_cone(probe.lights()[0], receivers[0].x));
-    REQUIRE_FALSE(mesh_light_draws_cone(probe.lights()[0], receivers[1].x));
-    REQUIRE(mesh_light_draws_cone(probe.lights()[0], receivers[2].x));
-    check_as_triangles(
-        [&](Scene& s) {
-            add_emissive_sphere(s, c, r, 12, 24, Vec3(2, 2, 2));
-            add_floor(s);
-        },
-        receivers, 2000, 0);
+    REQUIRE(draws_cosine(c, r, receivers[0].x));
+    REQUIRE(draws_cosine(c, r, receivers[1].x));
+    REQUIRE_FALSE(draws_cosine(c, r, receivers[2].x));
+    check_sphere_over_floor(c, r, receivers, 2000);
 }
 
 TEST_CASE("mesh lights light as their triangles: a plate shadows part of the floor",
@@ -632,4 +642,190 @@ TEST_CASE("mesh lights: much less variance than their triangles", "[direct][mesh
         // ... at a fraction of the variance.
         CHECK(vb >= kLeastRatio * va);
     }
+}
+
+// A bake's texels: each sample draws its own position in the texel's
+// footprint, and the cone or the cosine hemisphere there; a texel's later
+// passes continue its sequences and reuse its tables; shadowed_draws probes
+// the footprint's centre first. The same comparison as above (5σ, the
+// copies' standard errors), with T texels (one stream each) of one footprint
+// as T independent estimates, over two passes of 8 and 24 rounds.
+namespace {
+
+testing::MeanAndError footprint_copies(const Scene& scene, const DirectLightingSettings& settings,
+                      const testing::SquareFootprint& footprint, int copies) {
+    LightingContext context(scene, settings);
+    PointLighting shader(context);
+    std::vector<double> v;
+    for (int c = 0; c < copies; ++c) {
+        double first[3], second[3];
+        shader.shade(std::uint64_t(c), 0, 8, footprint.centre(), &footprint, first, nullptr);
+        shader.shade(std::uint64_t(c), 8, 24, footprint.centre(), &footprint, second, nullptr);
+        v.push_back((8 * first[1] + 24 * second[1]) / 32);
+    }
+    return testing::mean_and_error(v);
+}
+
+}  // namespace
+
+TEST_CASE("mesh lights light as their triangles: texel footprints over passes",
+          "[direct][mesh_lights]") {
+    constexpr int kTexels = 512;
+    struct Case {
+        const char* what;
+        bool plate;  // the plate of the shadowed scene, over the resting sphere
+        testing::SquareFootprint footprint;
+    };
+    // The resting sphere (r 0.4 about (0, 0, 0.4)); the cone's margin ends
+    // ~6 mm from the contact, inside the first footprint. The plate at
+    // z = 0.85 over x ≥ 0.3 hides part of the sphere from the third.
+    const Case cases[] = {
+        {"1 cm texel across the cosine hemisphere's edge", false,
+         testing::SquareFootprint(Vec3(0.006, 0.001, 0), 0.005)},
+        {"10 cm texel beside the contact", false,
+         testing::SquareFootprint(Vec3(0.15, -0.05, 0), 0.05)},
+        {"20 cm texel in the plate's penumbra", true,
+         testing::SquareFootprint(Vec3(0.8, 0, 0), 0.1)},
+    };
+    std::uint64_t seed = 5000;
+    for (const Case& c : cases) {
+        Scene mesh, triangles;
+        for (Scene* s : {&mesh, &triangles}) {
+            add_floor(*s);
+            add_emissive_sphere(*s, Vec3(0, 0, 0.4), 0.4, 12, 24, Vec3(2, 2, 2));
+            if (c.plate)
+                s->add_mesh(std::vector<Vec3>{{0.3, -3, 0.85}, {3, -3, 0.85}, {3, 3, 0.85},
+                                              {0.3, 3, 0.85}},
+                            {{0, 1, 2}, {0, 2, 3}});
+        }
+        triangles.set_mesh_lights(false);
+        mesh.commit();
+        triangles.commit();
+        for (const auto& names : {std::vector<std::string>{"power/solid-angle", "bsdf"},
+                                  std::vector<std::string>{"tree/solid-angle"}})
+            for (int shadowed_draws : {1, 4}) {
+                DirectLightingSettings s = testing::lighting_settings(
+                    names, std::vector<int>(names.size(), 2), 1, Strategy::Balance, 0);
+                s.shadowed_draws = shadowed_draws;
+                s.seed = seed++;
+                const testing::MeanAndError a = footprint_copies(mesh, s, c.footprint, kTexels);
+                s.seed = seed++;
+                const testing::MeanAndError b = footprint_copies(triangles, s, c.footprint, kTexels);
+                INFO(c.what << ", " << names.front() << " and " << names.size() - 1
+                            << " more, shadowed_draws " << shadowed_draws << ": mesh light "
+                            << a.mean << " ± " << a.standard_error << ", triangles " << b.mean
+                            << " ± " << b.standard_error);
+                CHECK(std::isfinite(a.mean));
+                CHECK(std::isfinite(b.mean));
+                CHECK(b.standard_error > 0);
+                CHECK(std::abs(a.mean - b.mean) <=
+                      kSigmas * std::sqrt(a.standard_error * a.standard_error +
+                                          b.standard_error * b.standard_error));
+            }
+    }
+}
+
+// shadowed_draws' probe (direct_lighting.cpp, centre_in_shadow) weighs and
+// traces each light's middle point: a mesh light's is its cone's axis (the
+// cosine's normal inside its sphere), seen where the closest hit is on its
+// mesh. Two emissive spheres over the floor (the plan then draws uniformly
+// and asks for the probe): a texel between them that sees both is drawn
+// once a count, one under a plate that hides both four times.
+TEST_CASE("mesh lights: shadowed_draws' probe sees them", "[direct][mesh_lights]") {
+    for (bool plate : {false, true}) {
+        Scene scene;
+        add_emissive_sphere(scene, Vec3(0, 0, 1), 0.3, 16, 32, Vec3(2, 2, 2));
+        add_emissive_sphere(scene, Vec3(1, 0, 1), 0.3, 16, 32, Vec3(2, 2, 2));
+        add_floor(scene);
+        if (plate)
+            scene.add_mesh(std::vector<Vec3>{{-0.5, -0.5, 0.3}, {1.5, -0.5, 0.3},
+                                             {1.5, 0.5, 0.3}, {-0.5, 0.5, 0.3}},
+                           {{0, 1, 2}, {0, 2, 3}});
+        scene.commit();
+        REQUIRE(count_of(scene, LightType::Mesh) == 2);
+        DirectLightingSettings s;
+        int shadowed_draws = 0;
+        default_techniques(scene, s.techniques, s.samples, &shadowed_draws);
+        CHECK(shadowed_draws == kShadowedDraws);
+        s.shadowed_draws = kShadowedDraws;
+        LightingContext context(scene, s);
+        PointLighting shader(context);
+        const testing::SquareFootprint texel(Vec3(0.5, 0, 0), 0.05);
+        double value[3];
+        shader.shade(0, 0, 4, texel.centre(), &texel, value, nullptr);
+        INFO((plate ? "under the plate" : "in the open") << ": " << value[1]);
+        CHECK(shader.draws_per_count() == (plate ? kShadowedDraws : 1));
+        if (plate)
+            CHECK(value[1] == 0);
+        else
+            CHECK(value[1] > 0);
+    }
+}
+
+// A world among emitters (effect_plan.cpp, world_seen_through_emitters): it
+// is seen through the emitters by `bsdf` only where every emitter is at least
+// as bright as the world (else the emitters' part L_e − L_w would be
+// negative); a mesh light is such an emitter as its triangles are. A minor
+// world (the plan's world_by_bsdf) among few lights: the sphere as a mesh
+// light, a bright emissive quad (two triangle lights) and an opaque box.
+namespace {
+
+void build_world_scene(Scene& scene, double sphere_radiance, bool quad = true) {
+    add_emissive_sphere(scene, Vec3(0, 0, 1), 0.4, 12, 24, Vec3(1, 1, 1) * sphere_radiance);
+    if (quad)
+        scene.add_mesh(std::vector<Vec3>{{0.6, -0.2, 0.9}, {1.0, -0.2, 0.9}, {1.0, 0.2, 0.9},
+                                         {0.6, 0.2, 0.9}},
+                       {{0, 1, 2}, {0, 2, 3}}, Vec3(6, 6, 6));
+    add_box(scene, Vec3(-1.2, -0.2, 0.3), Vec3(-0.8, 0.2, 0.6), std::nullopt);
+    scene.add_light(make_world_light(Vec3(0.1, 0.1, 0.1)));
+}
+
+}  // namespace
+
+TEST_CASE("mesh lights: the world is seen through them only where they outshine it",
+          "[direct][mesh_lights][world]") {
+    struct Case {
+        double sphere_radiance;
+        bool quad;
+    };
+    for (const Case c : {Case{0.05, true}, Case{3.0, true}, Case{3.0, false}}) {
+        INFO("sphere radiance " << c.sphere_radiance << ", world 0.1"
+                                << (c.quad ? ", a quad" : ""));
+        Scene scene;
+        build_world_scene(scene, c.sphere_radiance, c.quad);
+        scene.commit();
+        REQUIRE(count_of(scene, LightType::Mesh) == 1);
+        std::vector<Technique> techniques;
+        std::vector<int> samples;
+        default_techniques(scene, techniques, samples);
+        const EffectPlan plan = plan_effects(scene, techniques, samples);
+        REQUIRE(plan.world_by_bsdf);
+        CHECK(plan.world_through_emitters == (c.sphere_radiance >= 0.1));
+    }
+}
+
+// The world seen through a mesh light (its part by `bsdf` wherever no opaque
+// surface is hit first, the mesh's L_e − L_w by the light techniques) or
+// behind a dim one: unbiased as with its triangles (whose plan, among many
+// lights, does not see the world through them).
+TEST_CASE("mesh lights light as their triangles: with a world", "[direct][mesh_lights][world]") {
+    const std::vector<Shading> receivers = {
+        {"under the sphere", {0, 0, 0}, kUp},
+        {"under the quad", {0.8, 0, 0.3}, kUp},
+        {"beside the box", {-0.6, 0.1, 0.2}, kUp},
+        {"under the box", {-1, 0, 0.1}, kUp},
+        {"near the sphere's underside", {0.3, 0.2, 0.55}, kUp},
+        {"inside the sphere", {0, 0, 1}, normalize(Vec3(0.2, 0, 1))},
+        {"beside the sphere, facing it", {0.6, 0, 1}, Vec3(-1, 0, 0)},
+        {"2 m away", {2, 0, 0}, kUp},
+    };
+    std::uint64_t seed = 6000;
+    for (double sphere_radiance : {0.05, 3.0})
+        for (bool quad : {true, false}) {
+            INFO("sphere radiance " << sphere_radiance << ", world 0.1"
+                                    << (quad ? ", a quad" : ""));
+            check_as_triangles(
+                [&](Scene& s) { build_world_scene(s, sphere_radiance, quad); }, receivers, seed);
+            seed += 1000;
+        }
 }

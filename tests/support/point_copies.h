@@ -23,6 +23,20 @@ struct PointCopies {
     DirectLightingStats stats;
 };
 
+// The mean of independent values and its standard error, from their spread.
+struct MeanAndError {
+    double mean = 0, standard_error = 0;
+};
+inline MeanAndError mean_and_error(const std::vector<double>& values) {
+    const double n = double(values.size());
+    MeanAndError m;
+    for (double v : values) m.mean += v / n;
+    double variance = 0;
+    for (double v : values) variance += (v - m.mean) * (v - m.mean) / (n - 1);
+    m.standard_error = std::sqrt(variance / n);
+    return m;
+}
+
 inline PointCopies light_point_copies(const Scene& scene, const Vec3& x, const Vec3& n,
                                       const DirectLightingSettings& settings, int copies) {
     std::vector<double> points, normals, value(3 * std::size_t(copies)),
