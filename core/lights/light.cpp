@@ -440,6 +440,15 @@ namespace {
 // from: it draws the cosine hemisphere instead.
 constexpr double kMeshConeMargin = 1e-4;
 
+// A direction ∝ cos θ about n: a world's draw, and a mesh light's from inside
+// its sphere.
+std::optional<LightSample> sample_cosine_about(const Vec3& n, double u1, double u2) {
+    const Vec3 local = sample_cosine_hemisphere(u1, u2);
+    const double pdf = pdf_cosine_hemisphere(local);
+    if (!(pdf > 0)) return std::nullopt;
+    return LightSample{Frame(n).to_world(local), kInf, pdf};
+}
+
 }  // namespace
 
 bool mesh_light_draws_cone(const Light& l, const Vec3& x) {
@@ -600,19 +609,6 @@ bool sampler_applies(const Light& l, ShapeSampler sampler, const Vec3& x, const 
 
 std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, const Vec3& x,
                                         const Vec3& n, double u1, double u2) {
-    if (l.type == LightType::Mesh) {
-        // Every sampler: directions toward the bounding sphere, uniform in
-        // solid angle; the first hit along one decides what it sees.
-        if (mesh_light_draws_cone(l, x)) {
-            const Cone c = Cone::around_sphere(x, l.position, l.radius);
-            if (!(c.one_minus_cos > 0)) return std::nullopt;
-            return LightSample{c.sample(u1, u2), kInf, 1.0 / c.solid_angle()};
-        }
-        const Vec3 local = sample_cosine_hemisphere(u1, u2);
-        const double pdf = pdf_cosine_hemisphere(local);
-        if (!(pdf > 0)) return std::nullopt;
-        return LightSample{Frame(n).to_world(local), kInf, pdf};
-    }
     if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.sample_projected(x, n, u1, u2);
         if (l.type == LightType::Rect) {
@@ -656,27 +652,21 @@ std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, co
         case LightType::Sun:
             if (l.sun_half_angle <= 0) return std::nullopt;
             return sun_of(l).sample_solid_angle(u1, u2);
-        case LightType::World: {
-            const Frame frame(n);
-            const Vec3 local = sample_cosine_hemisphere(u1, u2);
-            const double pdf = pdf_cosine_hemisphere(local);
-            if (!(pdf > 0)) return std::nullopt;
-            return LightSample{frame.to_world(local), kInf, pdf};
+        case LightType::World: return sample_cosine_about(n, u1, u2);
+        case LightType::Mesh: {
+            // Every sampler: directions toward the bounding sphere, uniform in
+            // solid angle; the first hit along one decides what it sees.
+            if (!mesh_light_draws_cone(l, x)) return sample_cosine_about(n, u1, u2);
+            const Cone c = Cone::around_sphere(x, l.position, l.radius);
+            if (!(c.one_minus_cos > 0)) return std::nullopt;
+            return LightSample{c.sample(u1, u2), kInf, 1.0 / c.solid_angle()};
         }
-        case LightType::Mesh: break;  // above
     }
     return std::nullopt;
 }
 
 double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
                  const Vec3& w) {
-    if (l.type == LightType::Mesh) {
-        if (mesh_light_draws_cone(l, x)) {
-            const Cone c = Cone::around_sphere(x, l.position, l.radius);
-            return c.one_minus_cos > 0 ? c.pdf(w) : 0.0;
-        }
-        return std::max(0.0, dot(n, w)) * kInvPi;
-    }
     if (sampler == ShapeSampler::ProjectedSolidAngle) {
         if (l.type == LightType::Triangle) return l.triangle.pdf_projected(x, n, w);
         if (l.type == LightType::Rect) {
@@ -716,7 +706,11 @@ double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3
         case LightType::Sun:
             return l.sun_half_angle > 0 ? sun_of(l).pdf_solid_angle(w) : 0;
         case LightType::World: return std::max(0.0, dot(n, w)) * kInvPi;
-        case LightType::Mesh: break;  // above
+        case LightType::Mesh: {
+            if (!mesh_light_draws_cone(l, x)) return std::max(0.0, dot(n, w)) * kInvPi;
+            const Cone c = Cone::around_sphere(x, l.position, l.radius);
+            return c.one_minus_cos > 0 ? c.pdf(w) : 0.0;
+        }
     }
     return 0;
 }
