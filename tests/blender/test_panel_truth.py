@@ -1,0 +1,273 @@
+"""Issue 38 items 3–5, headless: warnings where the artist looks, a panel whose text
+fits the default Properties width, the bake target among several Image Texture
+nodes, UDIM images, the add-on's location text and the per-vertex wording.
+
+    scripts/blender_run.sh tests/blender/test_panel_truth.py
+"""
+
+import os
+import sys
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import omis_test_utils as U  # noqa: E402
+import panel_fit  # noqa: E402
+
+import omis_bake  # noqa: E402
+from omis_bake import job as job_module, operators, ui  # noqa: E402
+
+check = U.check
+# The default Properties editor's panel region (Blender 3.4's layout, 1920×1080).
+DEFAULT_WIDTH = ui.DEFAULT_REGION_WIDTH
+# Each a setting the bake ignores, and a word of the warning that must say so.
+EXPECTED = {
+    "normal map": "Normal is linked",
+    "textured metallic": "Metallic is linked",
+    "guessed target": "no Image Texture node is active",
+    "light node tree": "node tree is ignored",
+    "occluder transparency": "transparency",
+}
+
+
+def warned_scene():
+    """A floor whose material has a normal-map texture, a textured Metallic and the bake
+    target (unlinked) with the BSDF the active node; a lamp with a node tree; a
+    half-transparent occluder. Returns (floor, target image, normal-map image)."""
+    U.reset_scene()
+    target = U.make_image("target", 32)
+    normal_img = U.make_image("normal_tex", 32, color=(0.5, 0.5, 1.0, 1.0))
+    mat = bpy.data.materials.new("Floor")
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    normal_tex = nodes.new("ShaderNodeTexImage")
+    normal_tex.name = "Normal Texture"
+    normal_tex.image = normal_img
+    normal_map = nodes.new("ShaderNodeNormalMap")
+    links.new(normal_tex.outputs["Color"], normal_map.inputs["Color"])
+    links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
+    noise = nodes.new("ShaderNodeTexNoise")
+    links.new(noise.outputs["Fac"], bsdf.inputs["Metallic"])
+    bake_node = nodes.new("ShaderNodeTexImage")
+    bake_node.name = "Bake Target"
+    bake_node.image = target
+    nodes.active = bsdf
+    floor = U.grid_mesh("Floor", size=2.0, cuts=1)
+    floor.data.materials.append(mat)
+    lamp = U.add_light('AREA', "lamp", energy=200.0, location=(0.2, 0.1, 1.5), size=0.5)
+    lamp.data.use_nodes = True
+    glass = bpy.data.materials.new("HalfGlass")
+    glass.use_nodes = True
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    box = U.add_box("Box", (0.3, 0.3, 0.3), (0.5, 0.5, 0.4))
+    box.data.materials.append(glass)
+    U.select_only([floor])
+    return floor, target, normal_img
+
+
+def panel_labels():
+    out = []
+    for text, _, _ in panel_fit.texts(ui.draw_omis, DEFAULT_WIDTH):
+        out.append(text)
+    return out
+
+
+def test_warnings_where_the_artist_looks():
+    floor, target, normal_img = warned_scene()
+    before = U.pixels(normal_img).copy()
+    props = bpy.context.scene.omis
+    props.show_all_warnings = False
+    stats = omis_bake.bake(bpy.context, samples=4)
+    warnings = stats["warnings"]
+    for what, words in EXPECTED.items():
+        check(sum(words in w for w in warnings) == 1, f"{what}: not warned once: {warnings}")
+    # The bake went into the one Image Texture node not linked to the shader.
+    check(U.pixels(target)[..., :3].max() > 0, "the bake target stayed black")
+    check(np.array_equal(U.pixels(normal_img), before), "the normal-map texture was changed")
+
+    # The panel: how many, the first ones, the rest on demand.
+    check(props.last_warnings.split("\n") == warnings, "scene.omis keeps every warning")
+    n = len(warnings)
+    text = " ".join(panel_labels())
+    check(f"complete, with {n} warnings" in text, f"no status with {n} warnings: {text}")
+    first = ui.FIRST_WARNINGS
+    for w in warnings[:first]:
+        check(" ".join(w.split()) in text, f"a first warning is not shown: {w}")
+    for w in warnings[first:]:
+        check(w not in text, f"a later warning shown before asked for: {w}")
+    check(f"{n - first} more warnings" in text, f"no '{n - first} more warnings': {text}")
+    props.show_all_warnings = True
+    text = " ".join(panel_labels())
+    for w in warnings:
+        check(w in text, f"a warning is missing from the expanded list: {w}")
+    check("Show fewer" in text, "no way to fold the list again")
+    # Everything fits the default width, the expanded list included.
+    too_long = panel_fit.overflows(ui.draw_omis, DEFAULT_WIDTH)
+    check(not too_long, f"texts wider than their room: {too_long}")
+    props.show_all_warnings = False
+    return stats
+
+
+class RecordingOperator:
+    def __init__(self):
+        self.reports = []
+
+    def report(self, level, text):
+        self.reports.append((set(level), text))
+
+
+def test_operator_reports(stats):
+    """Each warning at WARNING level, and a warning last: Blender's status bar shows
+    the last report."""
+    op = RecordingOperator()
+    operators._report_stats(op, stats)
+    warned = [text for level, text in op.reports if level == {'WARNING'}]
+    for w in stats["warnings"]:
+        check(w in warned, f"not reported as a warning: {w}")
+    check(op.reports[-1][0] == {'WARNING'}, f"the last report is not a warning: {op.reports[-1]}")
+    n = len(stats["warnings"])
+    check(f"with {n} warnings" in op.reports[-1][1], op.reports[-1][1])
+    summary = [text for level, text in op.reports if level == {'INFO'}]
+    check(any(f"complete, with {n} warnings" in t for t in summary), f"{summary}")
+    # A bake without warnings ends on its summary.
+    op = RecordingOperator()
+    operators._report_stats(op, dict(stats, warnings=[]))
+    check(op.reports[-1][0] == {'INFO'} and "(complete)" in op.reports[-1][1], op.reports)
+
+
+def test_new_warnings_show_up():
+    """Any warning string the bake returns reaches the panel (later bake statistics too)."""
+    original = job_module.BakeJob.stats
+    news = "12 texels of Floor lie inside other objects"
+
+    def with_new_warning(self):
+        stats = original(self)
+        stats["warnings"].append(news)
+        return stats
+    job_module.BakeJob.stats = with_new_warning
+    try:
+        warned_scene()
+        stats = omis_bake.bake(bpy.context, samples=1)
+    finally:
+        job_module.BakeJob.stats = original
+    props = bpy.context.scene.omis
+    check(news in props.last_warnings.split("\n"), "the new warning is not kept")
+    props.show_all_warnings = True
+    text = " ".join(panel_labels())
+    props.show_all_warnings = False
+    check(news in text and f"with {len(stats['warnings'])} warnings" in text, text)
+
+
+def two_image_material(name, linked):
+    """A material with two Image Texture nodes, the BSDF active; `linked` names the ones
+    wired into the shader (A through a Normal Map, B into Base Color)."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes = mat.node_tree.nodes
+    for node_name in ("A", "B"):
+        node = nodes.new("ShaderNodeTexImage")
+        node.name = node_name
+        node.image = U.make_image(f"{name}_{node_name}", 16)
+        if node_name in linked:
+            bsdf = nodes["Principled BSDF"]
+            if node_name == "A":
+                nm = nodes.new("ShaderNodeNormalMap")
+                mat.node_tree.links.new(node.outputs["Color"], nm.inputs["Color"])
+                mat.node_tree.links.new(nm.outputs["Normal"], bsdf.inputs["Normal"])
+            else:
+                mat.node_tree.links.new(node.outputs["Color"], bsdf.inputs["Base Color"])
+    nodes.active = nodes["Principled BSDF"]
+    return mat
+
+
+def refusal(objects):
+    try:
+        omis_bake.bake(bpy.context, objects, samples=1)
+    except omis_bake.BakeError as exc:
+        return str(exc)
+    raise AssertionError("the bake was not refused")
+
+
+def test_bake_target_and_udim():
+    U.reset_scene()
+    U.add_light('SUN', "sun", energy=2.0)
+    for linked, chosen in ((("A",), "B"), (("B",), "A")):
+        U.reset_scene()
+        U.add_light('SUN', "sun", energy=2.0)
+        ob = U.grid_mesh("Plane", size=1.0)
+        mat = two_image_material("M", linked)
+        ob.data.materials.append(mat)
+        U.select_only([ob])
+        stats = omis_bake.bake(bpy.context, samples=1)
+        check(stats["images"] == [f"M_{chosen}"], f"baked into {stats['images']}, not M_{chosen}")
+    # Neither (or both) linked: a refusal naming the candidates and how to choose.
+    for linked in ((), ("A", "B")):
+        U.reset_scene()
+        U.add_light('SUN', "sun", energy=2.0)
+        ob = U.grid_mesh("Plane", size=1.0)
+        ob.data.materials.append(two_image_material("M", linked))
+        U.select_only([ob])
+        message = refusal([ob])
+        check('"A"' in message and '"B"' in message and "click the one to bake into" in message,
+              message)
+    # UDIM: refused with what to do instead.
+    U.reset_scene()
+    U.add_light('SUN', "sun", energy=2.0)
+    tiled = bpy.data.images.new("tiles", 16, 16, float_buffer=True, tiled=True)
+    ob = U.grid_mesh("Plane", size=1.0)
+    ob.data.materials.append(U.image_material("m", tiled))
+    U.select_only([ob])
+    message = refusal([ob])
+    check("UDIM" in message and "single (non-tiled) image" in message, message)
+
+
+def test_vertex_wording():
+    U.reset_scene()
+    ob = U.grid_mesh("Plane", size=1.0, cuts=2)
+    ob.data.color_attributes.new("Col", 'FLOAT_COLOR', 'POINT')
+    U.add_light('SUN', "sun", energy=2.0)
+    U.select_only([ob])
+    stats = omis_bake.bake(bpy.context, samples=2, target='COLOR_ATTRIBUTES')
+    text = " ".join(panel_labels())
+    check("per vertex" in text and "95 % of vertices" in text and "texel" not in text, text)
+    op = RecordingOperator()
+    operators._report_stats(op, stats)
+    line = next(t for level, t in op.reports if "samples per" in t)
+    check("samples per vertex" in line and "95 % of vertices" in line, line)
+
+
+def test_location_and_fit():
+    panel = bpy.types.OMIS_PT_bake
+    location = omis_bake.bl_info["location"]
+    check("Render" in location and panel.bl_label in location and panel.bl_context == "render",
+          f"location {location!r} does not say where the panel {panel.bl_label!r} is")
+    # A refusal is wrapped, every word kept, and fits.
+    bpy.context.scene.render.bake.use_selected_to_active = True
+    try:
+        reason = omis_bake.settings.settings_from(bpy.context.scene.omis).unsupported()
+        shown = panel_fit.texts(ui.draw_omis, DEFAULT_WIDTH)
+        too_long = panel_fit.overflows(ui.draw_omis, DEFAULT_WIDTH)
+    finally:
+        bpy.context.scene.render.bake.use_selected_to_active = False
+    check(" ".join(reason.split()) in " ".join(t for t, _, _ in shown), "the refusal lost words")
+    check(not too_long, f"texts wider than their room: {too_long}")
+    # The header while baking: the panel's name and the longest progress text.
+    needed, room = panel_fit.header_fits(panel.bl_label, "100 %, 23 h 59 min left",
+                                         DEFAULT_WIDTH)
+    check(needed <= room, f"the header needs {needed:.0f} px of {room:.0f}")
+
+
+def main():
+    stats = test_warnings_where_the_artist_looks()
+    print("ok test_warnings_where_the_artist_looks")
+    test_operator_reports(stats)
+    print("ok test_operator_reports")
+    for test in (test_new_warnings_show_up, test_bake_target_and_udim, test_vertex_wording,
+                 test_location_and_fit):
+        test()
+        print(f"ok {test.__name__}")
+
+
+main()
