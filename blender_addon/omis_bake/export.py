@@ -676,6 +676,9 @@ class _Exporter:
 
         materials = [slot.material for slot in ob_eval.material_slots]
         emissions = self._slot_emission(materials)
+        if not ob_eval.visible_diffuse and any(e is not None for e in emissions):
+            self.warn(f'"{ob_eval.name}" emits light but is invisible to diffuse rays; omis '
+                      f'still lets it light the bake')
         slot_images = self._bake_slot_images.get(bake_name) if bake_name else None
         # The receiver closure matters only where omis shades: on baked objects.
         receivers = self._slot_receivers(materials) if bake_name else []

@@ -63,7 +63,7 @@ def wrap_lines(text, width, icon=True):
     (with an icon or the blank beside it on every line)."""
     room = width - (ICON_WIDTH * icon + TEXT_MARGIN) * ui_scale()
     lines, line = [], ""
-    for word in text.split():
+    for word in _pieces(text.split(), room):
         candidate = f"{line} {word}" if line else word
         if line and text_width(candidate) > room:
             lines.append(line)
@@ -73,6 +73,21 @@ def wrap_lines(text, width, icon=True):
     if line:
         lines.append(line)
     return lines
+
+
+def _pieces(words, room):
+    """The words, each one wider than `room` (a Python path) cut where the next
+    character would not fit, after a '.' or '_' when there is one."""
+    for word in words:
+        while text_width(word) > room and len(word) > 1:
+            cut = 1
+            while cut < len(word) and text_width(word[:cut + 1]) <= room:
+                cut += 1
+            soft = max(word.rfind(".", 0, cut), word.rfind("_", 0, cut))
+            cut = soft + 1 if soft > 0 else cut
+            yield word[:cut]
+            word = word[cut:]
+        yield word
 
 
 def _wrapped(layout, text, width, icon='NONE'):
@@ -180,6 +195,7 @@ def _draw_warnings(box, props, width):
     if not warnings:
         return
     col = box.column()
+    col.use_property_split = False   # the toggle: its triangle, then its text
     show = warnings if props.show_all_warnings else warnings[:FIRST_WARNINGS]
     for warning in show:
         _wrapped(col, warning, width, icon='DOT')
@@ -187,7 +203,9 @@ def _draw_warnings(box, props, width):
     if hidden > 0:
         text = "Show fewer" if props.show_all_warnings else \
             f"{hidden} more warning{'s' if hidden > 1 else ''}"
-        col.prop(props, "show_all_warnings", text=text, emboss=False,
+        row = col.row()
+        row.alignment = 'LEFT'
+        row.prop(props, "show_all_warnings", text=text, emboss=False,
                  icon='DISCLOSURE_TRI_DOWN' if props.show_all_warnings
                  else 'DISCLOSURE_TRI_RIGHT')
 

@@ -31,42 +31,6 @@ EXPECTED = {
 }
 
 
-def warned_scene():
-    """A floor whose material has a normal-map texture, a textured Metallic and the bake
-    target (unlinked) with the BSDF the active node; a lamp with a node tree; a
-    half-transparent occluder. Returns (floor, target image, normal-map image)."""
-    U.reset_scene()
-    target = U.make_image("target", 32)
-    normal_img = U.make_image("normal_tex", 32, color=(0.5, 0.5, 1.0, 1.0))
-    mat = bpy.data.materials.new("Floor")
-    mat.use_nodes = True
-    nodes, links = mat.node_tree.nodes, mat.node_tree.links
-    bsdf = nodes["Principled BSDF"]
-    normal_tex = nodes.new("ShaderNodeTexImage")
-    normal_tex.name = "Normal Texture"
-    normal_tex.image = normal_img
-    normal_map = nodes.new("ShaderNodeNormalMap")
-    links.new(normal_tex.outputs["Color"], normal_map.inputs["Color"])
-    links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
-    noise = nodes.new("ShaderNodeTexNoise")
-    links.new(noise.outputs["Fac"], bsdf.inputs["Metallic"])
-    bake_node = nodes.new("ShaderNodeTexImage")
-    bake_node.name = "Bake Target"
-    bake_node.image = target
-    nodes.active = bsdf
-    floor = U.grid_mesh("Floor", size=2.0, cuts=1)
-    floor.data.materials.append(mat)
-    lamp = U.add_light('AREA', "lamp", energy=200.0, location=(0.2, 0.1, 1.5), size=0.5)
-    lamp.data.use_nodes = True
-    glass = bpy.data.materials.new("HalfGlass")
-    glass.use_nodes = True
-    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
-    box = U.add_box("Box", (0.3, 0.3, 0.3), (0.5, 0.5, 0.4))
-    box.data.materials.append(glass)
-    U.select_only([floor])
-    return floor, target, normal_img
-
-
 def panel_labels():
     out = []
     for text, _, _ in panel_fit.texts(ui.draw_omis, DEFAULT_WIDTH):
@@ -75,7 +39,7 @@ def panel_labels():
 
 
 def test_warnings_where_the_artist_looks():
-    floor, target, normal_img = warned_scene()
+    floor, target, normal_img = U.ignored_settings_scene()
     before = U.pixels(normal_img).copy()
     props = bpy.context.scene.omis
     props.show_all_warnings = False
@@ -148,7 +112,7 @@ def test_new_warnings_show_up():
         return stats
     job_module.BakeJob.stats = with_new_warning
     try:
-        warned_scene()
+        U.ignored_settings_scene()
         stats = omis_bake.bake(bpy.context, samples=1)
     finally:
         job_module.BakeJob.stats = original
@@ -223,6 +187,33 @@ def test_bake_target_and_udim():
     check("UDIM" in message and "single (non-tiled) image" in message, message)
 
 
+def test_more_ignored_settings():
+    """A displacement, an emitter hidden from diffuse rays, a Transparent BSDF: warned."""
+    U.reset_scene()
+    img = U.make_image("t", 16)
+    ob = U.image_grid("Plane", img, size=1.0)
+    mat = ob.data.materials[0]
+    bump = mat.node_tree.nodes.new("ShaderNodeDisplacement")
+    mat.node_tree.links.new(bump.outputs[0],
+                            mat.node_tree.nodes["Material Output"].inputs["Displacement"])
+    glow = U.grid_mesh("Glow", size=0.5, location=(0, 0, 1))
+    glow.rotation_euler = (3.14159, 0, 0)
+    glow.data.materials.append(U.emission_material("Glow", strength=5.0))
+    glow.visible_diffuse = False
+    veil = U.grid_mesh("Veil", size=0.3, location=(0, 0, 0.5))
+    veil_mat = bpy.data.materials.new("Veil")
+    veil_mat.use_nodes = True
+    nodes = veil_mat.node_tree.nodes
+    clear = nodes.new("ShaderNodeBsdfTransparent")
+    veil_mat.node_tree.links.new(clear.outputs[0], nodes["Material Output"].inputs["Surface"])
+    veil.data.materials.append(veil_mat)
+    U.select_only([ob])
+    warnings = omis_bake.bake(bpy.context, samples=1)["warnings"]
+    for words in ("Displacement) is ignored", '"Glow" emits light but is invisible',
+                  'material "Veil": its transparency'):
+        check(any(words in w for w in warnings), f"{words!r} not warned: {warnings}")
+
+
 def test_vertex_wording():
     U.reset_scene()
     ob = U.grid_mesh("Plane", size=1.0, cuts=2)
@@ -251,7 +242,9 @@ def test_location_and_fit():
         too_long = panel_fit.overflows(ui.draw_omis, DEFAULT_WIDTH)
     finally:
         bpy.context.scene.render.bake.use_selected_to_active = False
-    check(" ".join(reason.split()) in " ".join(t for t, _, _ in shown), "the refusal lost words")
+    # (a word too long for a line, a Python path, is cut: compare without spaces)
+    check("".join(reason.split()) in "".join("".join(t for t, _, _ in shown).split()),
+          "the refusal lost words")
     check(not too_long, f"texts wider than their room: {too_long}")
     # The header while baking: the panel's name and the longest progress text.
     needed, room = panel_fit.header_fits(panel.bl_label, "100 %, 23 h 59 min left",
@@ -264,8 +257,8 @@ def main():
     print("ok test_warnings_where_the_artist_looks")
     test_operator_reports(stats)
     print("ok test_operator_reports")
-    for test in (test_new_warnings_show_up, test_bake_target_and_udim, test_vertex_wording,
-                 test_location_and_fit):
+    for test in (test_new_warnings_show_up, test_bake_target_and_udim,
+                 test_more_ignored_settings, test_vertex_wording, test_location_and_fit):
         test()
         print(f"ok {test.__name__}")
 
