@@ -81,13 +81,24 @@ def _report_stats(op, stats):
                                f'Render Properties ▸ Bake (omis) ▸ Last bake): {warnings[0]}')
 
 
+def clock(seconds):
+    """'12 s', '3:05', '2:10:00': a duration in little room."""
+    seconds = int(round(max(0.0, float(seconds))))
+    if seconds < 60:
+        return f"{seconds} s"
+    minutes, seconds = divmod(seconds, 60)
+    if minutes < 60:
+        return f"{minutes}:{seconds:02d}"
+    return f"{minutes // 60}:{minutes % 60:02d}:{seconds:02d}"
+
+
 def header_text(job):
-    """'42 %, 12 s left': the progress short enough for the panel's header."""
+    """'42 %, 3:05 left': the progress short enough for the panel's header."""
     if job.cancel_requested:
         return "cancelling…"
     left = job.seconds_left()
     text = f"{100 * job.fraction:.0f} %"
-    return text if left is None else f"{text}, {format_seconds(left)} left"
+    return text if left is None else f"{text}, {clock(left)} left"
 
 
 def progress_text(job):

@@ -98,7 +98,7 @@ def _wrapped(layout, text, width, icon='NONE'):
 
 
 def _figure(layout, name, value):
-    split = layout.split(factor=0.45)
+    split = layout.split(factor=0.48)
     left = split.row()
     left.alignment = 'RIGHT'
     left.label(text=name)
@@ -110,7 +110,7 @@ def _draw_header_progress(panel, context):
     right end (the panel's name keeps its room)."""
     job = operators.running
     if job is not None:
-        panel.layout.label(text=operators.header_text(job), icon='TIME')
+        panel.layout.label(text=operators.header_text(job))
 
 
 def _draw_refusal(layout, context):
@@ -219,7 +219,9 @@ def _draw_last(layout, context, props):
     _draw_warnings(box, props, width)
     unit = operators.per_unit(props.last_target)
     _figure(box, "Time", operators.format_seconds(props.last_seconds))
-    _figure(box, "Samples", f"{props.last_samples_per_texel:.1f} per {unit}")
+    samples = props.last_samples_per_texel
+    _figure(box, "Samples", f"{samples:.1f} per {unit}" if samples < 100 else
+            f"{samples:.0f} per {unit}")
     # Without a noise limit the error is an upper estimate (one sequence per texel:
     # computed as for independent samples).
     bound = "" if props.last_error_measured else "≤ "

@@ -127,11 +127,21 @@ def _prop_texts(item, room, out, need):
         out.append((label, need(label, has_icon), room))
 
 
+class _Context:
+    """bpy.context with a region of a chosen width (the panel wraps text to it)."""
+
+    def __init__(self, region_width):
+        self.region = type("Region", (), {"width": region_width})()
+
+    def __getattr__(self, name):
+        return getattr(bpy.context, name)
+
+
 def texts(draw, region_width):
     """(text, needed pixels, room in pixels) for everything `draw(layout, context)` shows
     in a region `region_width` pixels wide."""
     root = _Item("column", False)
-    draw(root, bpy.context)
+    draw(root, _Context(region_width))
     out = []
     _texts(root, region_width - 2 * ui.PANEL_MARGIN * ui.ui_scale(), out)
     return out
@@ -143,10 +153,10 @@ def overflows(draw, region_width):
 
 
 def header_fits(label, progress, region_width):
-    """(needed, room): the panel's header — collapse arrow, name, the progress with its
-    icon at the right end, the drag handle — in a region `region_width` wide."""
+    """(needed, room): the panel's header — collapse arrow, name, the progress at the
+    right end, the drag handle's room — in a region `region_width` wide."""
     scale = ui.ui_scale()
     icon = ui.ICON_WIDTH * scale
     needed = (icon + ui.text_width(label) + ui.TEXT_MARGIN * scale
-              + icon + ui.text_width(progress) + ui.TEXT_MARGIN * scale + icon)
+              + ui.text_width(progress) + ui.TEXT_MARGIN * scale + icon)
     return needed, region_width - 2 * ui.PANEL_MARGIN * scale

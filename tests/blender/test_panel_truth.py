@@ -19,8 +19,10 @@ import omis_bake  # noqa: E402
 from omis_bake import job as job_module, operators, ui  # noqa: E402
 
 check = U.check
-# The default Properties editor's panel region (Blender 3.4's layout, 1920×1080).
+# The default Properties editor's panel region (Blender 3.4's layout, 1920×1080), and
+# the same layout on a 1600×900 screen (the areas scale with the window).
 DEFAULT_WIDTH = ui.DEFAULT_REGION_WIDTH
+NARROW_WIDTH = 247
 # Each a setting the bake ignores, and a word of the warning that must say so.
 EXPECTED = {
     "normal map": "Normal is linked",
@@ -67,9 +69,10 @@ def test_warnings_where_the_artist_looks():
     for w in warnings:
         check(w in text, f"a warning is missing from the expanded list: {w}")
     check("Show fewer" in text, "no way to fold the list again")
-    # Everything fits the default width, the expanded list included.
-    too_long = panel_fit.overflows(ui.draw_omis, DEFAULT_WIDTH)
-    check(not too_long, f"texts wider than their room: {too_long}")
+    # Everything fits the default width, the expanded list included, and a narrower one.
+    for width in (DEFAULT_WIDTH, NARROW_WIDTH):
+        too_long = panel_fit.overflows(ui.draw_omis, width)
+        check(not too_long, f"{width} px: texts wider than their room: {too_long}")
     props.show_all_warnings = False
     return stats
 
@@ -239,7 +242,8 @@ def test_location_and_fit():
     try:
         reason = omis_bake.settings.settings_from(bpy.context.scene.omis).unsupported()
         shown = panel_fit.texts(ui.draw_omis, DEFAULT_WIDTH)
-        too_long = panel_fit.overflows(ui.draw_omis, DEFAULT_WIDTH)
+        too_long = [t for width in (DEFAULT_WIDTH, NARROW_WIDTH)
+                    for t in panel_fit.overflows(ui.draw_omis, width)]
     finally:
         bpy.context.scene.render.bake.use_selected_to_active = False
     # (a word too long for a line, a Python path, is cut: compare without spaces)
@@ -247,9 +251,16 @@ def test_location_and_fit():
           "the refusal lost words")
     check(not too_long, f"texts wider than their room: {too_long}")
     # The header while baking: the panel's name and the longest progress text.
-    needed, room = panel_fit.header_fits(panel.bl_label, "100 %, 23 h 59 min left",
-                                         DEFAULT_WIDTH)
-    check(needed <= room, f"the header needs {needed:.0f} px of {room:.0f}")
+    # (the longest progress at the default width; a common one at the narrower width)
+    for width, progress in ((DEFAULT_WIDTH, "100 %, 23:59:59 left"),
+                            (NARROW_WIDTH, "42 %, 59:59 left")):
+        needed, room = panel_fit.header_fits(panel.bl_label, progress, width)
+        check(needed <= room, f"{width} px: the header needs {needed:.0f} px of {room:.0f}")
+
+
+def test_clock():
+    check([operators.clock(t) for t in (0.4, 12, 59.4, 60, 185, 3599, 3600, 7805)] ==
+          ["0 s", "12 s", "59 s", "1:00", "3:05", "59:59", "1:00:00", "2:10:05"], "clock")
 
 
 def main():
@@ -258,7 +269,8 @@ def main():
     test_operator_reports(stats)
     print("ok test_operator_reports")
     for test in (test_new_warnings_show_up, test_bake_target_and_udim,
-                 test_more_ignored_settings, test_vertex_wording, test_location_and_fit):
+                 test_more_ignored_settings, test_vertex_wording, test_location_and_fit,
+                 test_clock):
         test()
         print(f"ok {test.__name__}")
 
