@@ -6,6 +6,9 @@ model of Blender's layout (the widths rows, splits, boxes and split properties
 give their items; omis_bake.ui's margins) hands every text its room, which its
 width in Blender's UI font (blf) must not exceed. The screenshots of
 test_panel_screenshot.py show whether the model matches what Blender draws.
+Checked against Blender 3.4 at the default width (303-pixel region, UI scale 1.04):
+texts the model gave 106 of 108 and 100 of 108 pixels were drawn whole, texts it
+gave 115 of 108, 121 of 114 and 265 of 253 were cut ("Samples per tex…").
 
     too_long = overflows(draw, region_width)   # [(text, width, room)], empty when all fit
 """
