@@ -237,7 +237,10 @@ def test_location_and_fit():
     location = omis_bake.bl_info["location"]
     check("Render" in location and panel.bl_label in location and panel.bl_context == "render",
           f"location {location!r} does not say where the panel {panel.bl_label!r} is")
-    # A refusal is wrapped, every word kept, and fits.
+    # A refusal is wrapped, every word kept, and fits; so do the settings that show
+    # only with Least Noise off (Cutoff) and Manual sampling (every method's label).
+    props = bpy.context.scene.omis
+    props.use_optimal_mis, props.heuristic, props.technique_mode = False, 'CUTOFF', 'MANUAL'
     bpy.context.scene.render.bake.use_selected_to_active = True
     try:
         reason = omis_bake.settings.settings_from(bpy.context.scene.omis).unsupported()
@@ -246,6 +249,8 @@ def test_location_and_fit():
                     for t in panel_fit.overflows(ui.draw_omis, width)]
     finally:
         bpy.context.scene.render.bake.use_selected_to_active = False
+        for name in ("use_optimal_mis", "heuristic", "technique_mode"):
+            props.property_unset(name)
     # (a word too long for a line, a Python path, is cut: compare without spaces)
     check("".join(reason.split()) in "".join("".join(t for t, _, _ in shown).split()),
           "the refusal lost words")
