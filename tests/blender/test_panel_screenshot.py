@@ -144,7 +144,8 @@ class Steps:
         ui._draw_header_progress = counting_header
         self.plan = list(self.engine_steps('CYCLES', bpy.types.OMIS_PT_bake)) + \
             list(self.engine_steps('BLENDER_EEVEE', bpy.types.OMIS_PT_bake)) + \
-            list(self.bake_steps()) + list(self.default_width_steps())
+            list(self.bake_steps()) + list(self.default_width_steps()) + \
+            list(self.header_steps())
 
     def redraw(self):
         window, area, region = properties_area()
@@ -286,6 +287,11 @@ class Steps:
             U.check(lines[summary + 1:-1] == warnings, "the warnings do not follow the summary")
             U.check(lines[-1].startswith(f"omis bake complete, with {len(warnings)} warnings"),
                     f"the last report is not the warnings' summary: {lines[-1]}")
+        return (invoke, finished, folded, unfolded, reports)
+
+    def header_steps(self):
+        """The header while baking and a wrapped refusal, in the default Properties editor."""
+        def start():
             # A shorter panel (no Last bake box) keeps its header in view while baking.
             props = bpy.context.scene.omis
             props.last_status = ""
@@ -324,7 +330,7 @@ class Steps:
             screenshot("refusal_default_width", default_properties_area)
             self.fits("refusal")
             bpy.context.scene.render.bake.use_selected_to_active = False
-        return (invoke, finished, folded, unfolded, reports, header, cancelled, refusal)
+        return (start, header, cancelled, refusal)
 
     def __call__(self):
         try:
