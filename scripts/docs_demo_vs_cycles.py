@@ -6,7 +6,8 @@ the omis_bake add-on) beside Cycles' own Diffuse/Direct bake of the same wall ti
 
 Cycles' time per sample is measured first (t = t0 + k·spp, as bench/bench_cycles.py
 does), omis bakes under a time limit of S seconds, and Cycles gets the sample
-count that takes the same wall time as omis' whole bake call. Both errors are
+count that takes the same wall time as omis' whole bake call (re-aimed up to
+four times when a bake misses that time by more than 15 %: a loaded machine). Both errors are
 measured against a converged omis bake of R seconds (relMSE over the floor's
 texels, as bench_cycles.py; omis and Cycles agree on this room within its
 references' noise, bench/results/cycles_vs_omis.txt). Both images are shown with
@@ -92,7 +93,11 @@ def main():
     _, omis_wall, stats, _ = bench.omis_run(objects, image, "optimal", 1, seconds=args.seconds)
     omis_img = rgb(image)
     spp = bench.spp_for(omis_wall, t0, k)
-    _, cycles_wall = bench.cycles_run(objects, image, spp, 1)
+    for _ in range(4):  # a loaded machine skews the calibration: re-aim at omis' time
+        _, cycles_wall = bench.cycles_run(objects, image, spp, 1)
+        if abs(cycles_wall / omis_wall - 1.0) < 0.15:
+            break
+        spp = max(1, round(spp * omis_wall / cycles_wall))
     cycles_img = rgb(image)
 
     e_omis, e_cycles = rel_mse(omis_img, ref, mask), rel_mse(cycles_img, ref, mask)
