@@ -22,6 +22,7 @@ import math
 import os
 import shutil
 import sys
+import textwrap
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join(ROOT, "bench", "results")
@@ -91,14 +92,13 @@ def table(meta, rows):
         "|---|---|---|",
     ]
     lines += [f"| {scene} | {b:.2f} | **{o:.2f}** |" for scene, b, o in scenes]
-    lines += [
-        "",
+    summary = (
         f"Optimal ≤ {GOAL} on {met} of {len(scenes)} scenes; geometric mean over the scenes "
         f"(each counted at least {SCENE_FLOOR}): optimal "
         f"{geomean([max(o, SCENE_FLOOR) for _, _, o in scenes]):.3f}, balance "
         f"{geomean([max(b, SCENE_FLOOR) for _, b, _ in scenes]):.3f}; largest single cell: "
-        f"{worst}.",
-    ]
+        f"{worst}.")
+    lines += ["", textwrap.fill(summary, 84, break_on_hyphens=False)]
     return "\n".join(lines)
 
 
