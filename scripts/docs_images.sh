@@ -12,7 +12,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 shots="$(mktemp -d)"
 trap 'rm -rf "$shots"' EXIT
-OMIS_SCREENSHOT_DIR="$shots" bash scripts/blender_run.sh --ui tests/blender/test_panel_screenshot.py
+OMIS_SCREENSHOT_DIR="$shots" bash scripts/blender_run.sh --ui --screen 1920x1080 \
+    tests/blender/test_panel_screenshot.py
 mkdir -p docs/images
 cp "$shots/panel_cycles.png" docs/images/panel.png
 bash scripts/blender_run.sh scripts/docs_demo_vs_cycles.py "$@"

@@ -1,8 +1,8 @@
 """omis Bake — direct lighting baked with optimal multiple importance sampling.
 
-Render Properties ▸ Bake ▸ omis (under Cycles; a Bake (omis) panel of its own in
-Render Properties under EEVEE and the other engines): the same result as Cycles'
-Diffuse bake with only Direct enabled (E_direct/π), with less noise for the time.
+Render Properties ▸ Bake (omis), a panel of its own after the render engine's panels
+(Cycles' Bake among them), under every engine: the same result as Cycles' Diffuse
+bake with only Direct enabled (E_direct/π), with less noise for the time.
 Scripts:
 
     import omis_bake
@@ -15,7 +15,7 @@ bl_info = {
     "author": "omis developers",
     "version": (0, 1, 0),
     "blender": (3, 4, 0),
-    "location": "Properties ▸ Render ▸ Bake ▸ omis (any render engine)",
+    "location": "Properties ▸ Render ▸ Bake (omis), after the engine's panels",
     "description": "Bake direct lighting (Cycles' Diffuse ▸ Direct) with optimal multiple "
                    "importance sampling",
     "doc_url": "",

@@ -283,6 +283,22 @@ def material_emission(material, units, problems):
     return radiance if max(radiance) > 0 else None
 
 
+def material_transparency(material, problems):
+    """Transparency omis does not model (SPEC §4: Cycles lets shadow rays through
+    transparent surfaces): says so in `problems`."""
+    if material is None or not material.use_nodes or material.node_tree is None:
+        return
+    for node in material.node_tree.nodes:
+        if node.mute:
+            continue
+        alpha = node.inputs.get("Alpha") if node.type == 'BSDF_PRINCIPLED' else None
+        if node.type == 'BSDF_TRANSPARENT' or (alpha is not None and (
+                alpha.is_linked or _socket_value(alpha) < 1.0)):
+            problems.append(f'material "{material.name}": its transparency ({node.name}) is '
+                            f'ignored: omis treats its surfaces as opaque to shadows')
+            return
+
+
 def _follow_reroutes(node):
     while node is not None and node.type == 'REROUTE':
         node, _ = _linked_from(node.inputs[0])
@@ -295,6 +311,20 @@ def _unlinked_value(node, name, material, problems):
         problems.append(f'material "{material.name}": {node.name} ▸ {name} is linked; omis '
                         f'uses its unlinked value {_socket_value(socket):.3g}')
     return _socket_value(socket)
+
+
+def _ignored_shading(node, out, material, problems):
+    """Inputs that bend Cycles' shading normal (SPEC §4 receiver normal), which omis
+    does not model: it shades with the mesh's own normals."""
+    normal = node.inputs.get("Normal")
+    if normal is not None and _linked_from(normal)[0] is not None:
+        problems.append(f'material "{material.name}": {node.name} ▸ Normal is linked (a '
+                        f'normal map or bump), which omis ignores: it shades with the mesh\'s '
+                        f'normals')
+    displacement = out.inputs.get("Displacement")
+    if displacement is not None and _linked_from(displacement)[0] is not None:
+        problems.append(f'material "{material.name}": its displacement (Material Output ▸ '
+                        f'Displacement) is ignored by omis')
 
 
 def material_receiver(material, problems):
@@ -313,6 +343,7 @@ def material_receiver(material, problems):
         problems.append(f'material "{material.name}" has no surface shader; omis bakes it as '
                         f'Lambert (Cycles\' Diffuse bake gives 0 there)')
         return None
+    _ignored_shading(node, out, material, problems)
     if node.type == 'BSDF_DIFFUSE':
         roughness = _unlinked_value(node, "Roughness", material, problems)
         return ("oren-nayar", max(0.0, roughness)) if roughness > 0 else None
@@ -322,6 +353,11 @@ def material_receiver(material, problems):
             if node.inputs[name].is_linked or _socket_value(node.inputs[name]) > 0:
                 problems.append(f'material "{material.name}": {name} is not modelled by omis '
                                 f'(only the Principled diffuse is)')
+        for name in ("Metallic", "Transmission"):
+            if node.inputs[name].is_linked:
+                problems.append(f'material "{material.name}": {name} is linked (textured); omis '
+                                f'bakes the Principled diffuse everywhere (Cycles\' Diffuse bake '
+                                f'gives 0 where it reaches 1)')
         metallic = _socket_value(node.inputs["Metallic"])
         transmission = _socket_value(node.inputs["Transmission"])
         if not node.inputs["Metallic"].is_linked and not node.inputs["Transmission"].is_linked \
@@ -335,32 +371,73 @@ def material_receiver(material, problems):
     return None
 
 
-def active_image(material):
-    """(image, problem): the material's active Image Texture node's image."""
+def _nodes_feeding(node, seen=None):
+    """Names of the nodes whose outputs reach `node` through unmuted links (node groups'
+    insides are not entered: a group node stands for them)."""
+    seen = set() if seen is None else seen
+    for socket in node.inputs:
+        for link in socket.links:
+            if link.is_muted or not link.is_valid or link.from_node.name in seen:
+                continue
+            seen.add(link.from_node.name)
+            _nodes_feeding(link.from_node, seen)
+    return seen
+
+
+def bake_image_node(material, notes=None):
+    """(node, problem): the Image Texture node a material bakes into, as Cycles picks it
+    as far as Python can tell. Cycles bakes into the last Image Texture node made active
+    (a flag Python cannot read); Python sees the active node only. So: the active node
+    if it is an Image Texture; else the only Image Texture node; else the only one that
+    feeds nothing of the material's output (the others are its textures: a normal map,
+    a colour), saying so in `notes`; else a problem saying how to choose."""
+    nodes = material.node_tree.nodes
+    if nodes.active is not None and nodes.active.type == 'TEX_IMAGE':
+        return nodes.active, None
+    images = [n for n in nodes if n.type == 'TEX_IMAGE']
+    if len(images) == 1:
+        return images[0], None
+    if not images:
+        return None, f'material "{material.name}" has no Image Texture node'
+    out = _active_output(material.node_tree, {'ShaderNodeOutputMaterial'})
+    used = _nodes_feeding(out) if out is not None else set()
+    unused = [n for n in images if n.name not in used]
+    if len(unused) == 1:
+        if notes is not None:
+            notes.append(f'material "{material.name}": no Image Texture node is active; baked '
+                         f'into "{unused[0].name}", the one not linked to the shader (click '
+                         f'another to bake into it)')
+        return unused[0], None
+    among = unused if unused else images
+    names = ", ".join(f'"{n.name}"' for n in among[:4]) + (" …" if len(among) > 4 else "")
+    return None, (f'material "{material.name}" has {len(among)} Image Texture nodes that could '
+                  f'be the bake target ({names}): in the Shader Editor click the one to bake '
+                  f'into (it becomes the active node), or unlink the others from the shader')
+
+
+def active_image(material, notes=None):
+    """(image, problem): the image of the Image Texture node the material bakes into
+    (bake_image_node; how it was chosen, when not by the artist, in `notes`)."""
     if material is None:
         return None, "no material"
     if not material.use_nodes or material.node_tree is None:
         return None, f'material "{material.name}" does not use nodes'
-    nodes = material.node_tree.nodes
-    node = nodes.active
-    if node is None or node.type != 'TEX_IMAGE':
-        images = [n for n in nodes if n.type == 'TEX_IMAGE']
-        if len(images) == 1:
-            node = images[0]
-        elif images:
-            return None, (f'material "{material.name}" has several Image Texture nodes and '
-                          f'none is active: click the one to bake into')
-        else:
-            return None, f'material "{material.name}" has no Image Texture node'
+    node, problem = bake_image_node(material, notes)
+    if node is None:
+        return None, problem
     if node.image is None:
-        return None, f'the active Image Texture node of material "{material.name}" has no image'
+        return None, (f'the Image Texture node "{node.name}" of material "{material.name}" has '
+                      f'no image: choose or create one there')
     return node.image.original, None
 
 
 def _image_target(image, object_name):
     if image.source == 'TILED':
+        # Blender 3.4's Python reads and writes only an image's first tile.
         raise BakeError(f'image "{image.name}" (object "{object_name}") is a UDIM tiled '
-                        f'image: not supported')
+                        f'image, which omis cannot write: bake into a single (non-tiled) image '
+                        f'with the UVs in the 0–1 square — for several tiles, one material and '
+                        f'image per tile — or use Cycles\' Bake')
     width, height = int(image.size[0]), int(image.size[1])
     if width <= 0 or height <= 0:
         raise BakeError(f'image "{image.name}" (object "{object_name}") has no pixels: '
@@ -506,9 +583,9 @@ class _Exporter:
         if not slots:
             raise BakeError(f'"{ob.name}" has no material: add a material with an Image '
                             f'Texture node and make that node active')
-        per_slot, problems = [], []
+        per_slot, problems, notes = [], [], []
         for material in slots:
-            image, problem = active_image(material.original if material else None)
+            image, problem = active_image(material.original if material else None, notes)
             if image is None:
                 per_slot.append(None)
                 problems.append(problem)
@@ -523,6 +600,8 @@ class _Exporter:
         for problem in problems:
             if problem is not None:
                 self.warn(f'"{ob.name}": faces of a slot are not baked ({problem})')
+        for note in notes:
+            self.warn(note)
         self._bake_slot_images[ob.name_full] = per_slot
 
     def _check_attribute(self, ob, local):
@@ -557,6 +636,7 @@ class _Exporter:
                 problems = []
                 self._emission_cache[key] = material_emission(material.original, self.units,
                                                               problems)
+                material_transparency(material.original, problems)
                 for p in problems:
                     self.warn(p)
             out.append(self._emission_cache[key])
@@ -596,6 +676,9 @@ class _Exporter:
 
         materials = [slot.material for slot in ob_eval.material_slots]
         emissions = self._slot_emission(materials)
+        if not ob_eval.visible_diffuse and any(e is not None for e in emissions):
+            self.warn(f'"{ob_eval.name}" emits light but is invisible to diffuse rays; omis '
+                      f'still lets it light the bake')
         slot_images = self._bake_slot_images.get(bake_name) if bake_name else None
         # The receiver closure matters only where omis shades: on baked objects.
         receivers = self._slot_receivers(materials) if bake_name else []

@@ -215,6 +215,9 @@ class BakeJob:
         store.last_halving_measured = stats["halving_measured"]
         store.last_error_measured = stats["error_measured"]
         store.last_plan = stats["plan"]
+        store.last_target = stats["target"]
+        # Every warning the stats carry reaches the panel, whatever added it.
+        store.last_warnings = "\n".join(" ".join(str(w).split()) for w in stats["warnings"])
         return stats
 
     def _errors(self):

@@ -39,26 +39,66 @@ def format_seconds(seconds):
     return f"{int(seconds // 3600)} h {int(seconds % 3600 // 60)} min"
 
 
+def per_unit(target):
+    """What one baked value is: a texel of an image, or a vertex of a color attribute."""
+    return "vertex" if target in ('COLOR_ATTRIBUTES', 'VERTEX_COLORS') else "texel"
+
+
+def status_text(status, warnings):
+    """'complete', 'complete, with 3 warnings': how a bake ended, as the panel and the
+    status bar say it."""
+    n = len(warnings)
+    return status if n == 0 else f"{status}, with {n} warning{'s' if n > 1 else ''}"
+
+
 def accuracy_line(stats):
     """The accuracy reached and what halving it costs, in one sentence."""
     more = format_seconds(stats["halving_seconds"])
     halving = (f"an estimated {more} more (from the bake's convergence)"
                if stats["halving_measured"] else f"at most {more} more")
     bound = "" if stats.get("error_measured") else "≤ "
+    unit = "vertices" if per_unit(stats.get("target")) == "vertex" else "texels"
     return (f'error {bound}{100 * stats["error_mean"]:.2f} % mean, {100 * stats["error_p95"]:.2f} % '
-            f'for 95 % of texels; halving it: {halving}')
+            f'for 95 % of {unit}; halving it: {halving}')
 
 
 def _report_stats(op, stats):
-    for warning in stats["warnings"]:
-        op.report({'WARNING'}, warning)
+    """The summary at INFO level, then the warnings at WARNING level: Blender's status
+    bar shows the last report, so a bake with warnings ends on one (the Info editor
+    keeps them all; the panel's Last bake box lists them)."""
+    warnings = stats["warnings"]
     if stats["images"]:
         op.report({'INFO'}, "Baked into " + ", ".join(f'"{n}"' for n in stats["images"])
                   + ": save the images or pack them")
     op.report({'INFO'},
               f'omis bake: {format_seconds(stats["seconds"])}, '
-              f'{stats["samples_per_texel"]:.0f} samples per texel, {accuracy_line(stats)} '
-              f'({stats["status"]})')
+              f'{stats["samples_per_texel"]:.0f} samples per {per_unit(stats.get("target"))}, '
+              f'{accuracy_line(stats)} ({status_text(stats["status"], warnings)})')
+    for warning in warnings:
+        op.report({'WARNING'}, warning)
+    if len(warnings) > 1:
+        op.report({'WARNING'}, f'omis bake {status_text(stats["status"], warnings)} (listed in '
+                               f'Render Properties ▸ Bake (omis) ▸ Last bake): {warnings[0]}')
+
+
+def clock(seconds):
+    """'12 s', '3:05', '2:10:00': a duration in little room."""
+    seconds = int(round(max(0.0, float(seconds))))
+    if seconds < 60:
+        return f"{seconds} s"
+    minutes, seconds = divmod(seconds, 60)
+    if minutes < 60:
+        return f"{minutes}:{seconds:02d}"
+    return f"{minutes // 60}:{minutes % 60:02d}:{seconds:02d}"
+
+
+def header_text(job):
+    """'42 %, 3:05 left': the progress short enough for the panel's header."""
+    if job.cancel_requested:
+        return "cancelling…"
+    left = job.seconds_left()
+    text = f"{100 * job.fraction:.0f} %"
+    return text if left is None else f"{text}, {clock(left)} left"
 
 
 def progress_text(job):

@@ -112,13 +112,13 @@ def _props():
             unit='TIME_ABSOLUTE',
             description="Stop after this many seconds for the whole bake (0: no limit)"),
         "use_noise_target": BoolProperty(
-            name="Noise Threshold", default=False,
+            name="Noise Limit", default=False,
             description="Stop sampling a texel once its estimated noise (relative standard "
-                        "error) is below the threshold"),
+                        "error) is below the limit (a noise threshold)"),
         "noise_target": FloatProperty(
-            name="Noise Threshold", default=0.01, min=0.0001, max=1.0, precision=4,
+            name="Noise Limit", default=0.01, min=0.0001, max=1.0, precision=4,
             description="Noise (relative standard error) at which a texel is done: 0.01 "
-                        "means ±1 %"),
+                        "means ±1 % (a noise threshold)"),
         "seed": IntProperty(
             name="Seed", default=0, min=0,
             description="Random seed: the same seed and settings give the same bake"),
@@ -184,6 +184,12 @@ _RESULTS = (
      "noise: its error computed as for independent samples)"),
     ("last_plan", StringProperty, "Last Sampling Plan",
      "The sampling methods and sample counts chosen (the effect plan)"),
+    ("last_target", StringProperty, "Last Target",
+     "What the last bake wrote: 'IMAGE_TEXTURES' (texels) or 'COLOR_ATTRIBUTES' (vertices)"),
+    ("last_warnings", StringProperty, "Last Warnings",
+     "What the last bake ignored or did differently from Cycles, one warning per line"),
+    ("show_all_warnings", BoolProperty, "Show All Warnings",
+     "List every warning of the last bake, not only the first ones"),
 )
 
 

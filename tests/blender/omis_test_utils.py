@@ -251,6 +251,42 @@ def compare_to_cycles(label, omis_value, omis_noise, omis_mask, cycles_a, cycles
     return row
 
 
+def ignored_settings_scene():
+    """A floor whose material has a normal-map texture, a textured Metallic and the bake
+    target (unlinked) with the BSDF the active node; a lamp with a node tree; a
+    half-transparent occluder. Returns (floor, target image, normal-map image)."""
+    reset_scene()
+    target = make_image("target", 32)
+    normal_img = make_image("normal_tex", 32, color=(0.5, 0.5, 1.0, 1.0))
+    mat = bpy.data.materials.new("Floor")
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    bsdf = nodes["Principled BSDF"]
+    normal_tex = nodes.new("ShaderNodeTexImage")
+    normal_tex.name = "Normal Texture"
+    normal_tex.image = normal_img
+    normal_map = nodes.new("ShaderNodeNormalMap")
+    links.new(normal_tex.outputs["Color"], normal_map.inputs["Color"])
+    links.new(normal_map.outputs["Normal"], bsdf.inputs["Normal"])
+    noise = nodes.new("ShaderNodeTexNoise")
+    links.new(noise.outputs["Fac"], bsdf.inputs["Metallic"])
+    bake_node = nodes.new("ShaderNodeTexImage")
+    bake_node.name = "Bake Target"
+    bake_node.image = target
+    nodes.active = bsdf
+    floor = grid_mesh("Floor", size=2.0, cuts=1)
+    floor.data.materials.append(mat)
+    lamp = add_light('AREA', "lamp", energy=200.0, location=(0.2, 0.1, 1.5), size=0.5)
+    lamp.data.use_nodes = True
+    glass = bpy.data.materials.new("HalfGlass")
+    glass.use_nodes = True
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    box = add_box("Box", (0.3, 0.3, 0.3), (0.5, 0.5, 0.4))
+    box.data.materials.append(glass)
+    select_only([floor])
+    return floor, target, normal_img
+
+
 def temp_dir():
     return tempfile.mkdtemp(prefix="omis_blender_test_")
 

@@ -3,12 +3,20 @@ Blender draws it under Cycles and under EEVEE — one Render Properties panel of
 own under both, not inside Cycles' Bake panel —, screenshots of it, and a bake
 started from it showing its progress and time left in the panel's header.
 
+Issue 38 item 4: in the default layout's own Properties editor at its default width
+(a 1920×1080 screen), after a bake from the Bake button that ignored settings, the
+Last bake box lists its warnings (folded, then all) and every text fits its room
+(panel_fit.py: each text's width in Blender's UI font against the room Blender's
+layout gives it); the header while baking holds the panel's name and the progress.
+The bake's reports in the Info editor: the warnings after the summary, at WARNING level,
+and a warning last (what the status bar shows). Screenshots of each.
+
 For each engine: Blender itself must call the panel's draw, the Bake operator must be
 reachable from the Properties editor, and a screenshot with the panel must differ
 clearly from one without it (the panel's region is not empty) — no pixel-exact
 comparison. Screenshots go to <build>/test_screenshots/ for a person to look at.
 
-    scripts/blender_run.sh --ui tests/blender/test_panel_screenshot.py
+    scripts/blender_run.sh --ui --screen 1920x1080 tests/blender/test_panel_screenshot.py
 """
 
 import os
@@ -21,10 +29,11 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import omis_test_utils as U  # noqa: E402
+import panel_fit  # noqa: E402
 
 from omis_bake import operators, ui  # noqa: E402
 
-TIMEOUT = 120.0
+TIMEOUT = 180.0
 # OMIS_SCREENSHOT_DIR: where scripts/docs_images.sh collects docs/images/panel.png.
 OUT = os.environ.get("OMIS_SCREENSHOT_DIR") or os.path.join(
     os.environ.get("OMIS_BUILD_DIR", U.temp_dir()), "test_screenshots")
@@ -63,8 +72,39 @@ def properties_area():
     return window, area, region
 
 
-def screenshot(name):
-    window, area, region = properties_area()
+def default_properties_area():
+    """The Properties editor of Blender's default layout (the narrowest one: the
+    largest area became another), showing Render Properties."""
+    window = bpy.context.window_manager.windows[0]
+    area = min((a for a in window.screen.areas if a.type == 'PROPERTIES'),
+               key=lambda a: a.width)
+    space = area.spaces.active
+    try:
+        if space.context != 'RENDER':
+            space.context = 'RENDER'
+    except TypeError:
+        pass
+    region = next(r for r in area.regions if r.type == 'WINDOW')
+    return window, area, region
+
+
+def info_area():
+    window = bpy.context.window_manager.windows[0]
+    area = next(a for a in window.screen.areas if a.type in ('OUTLINER', 'INFO'))
+    return window, area, next(r for r in area.regions if r.type == 'WINDOW')
+
+
+def scroll_to_end(where):
+    """Mouse wheel over the editor until its end (the omis panel sits low)."""
+    window, area, region = where()
+    x, y = region.x + region.width // 2, region.y + region.height // 2
+    window.event_simulate(type='MOUSEMOVE', value='NOTHING', x=x, y=y)
+    for _ in range(60):
+        window.event_simulate(type='WHEELDOWNMOUSE', value='PRESS', x=x, y=y)
+
+
+def screenshot(name, where=properties_area):
+    window, area, region = where()
     path = os.path.join(OUT, name + ".png")
     with bpy.context.temp_override(window=window, area=area, region=region):
         bpy.ops.screen.screenshot_area(filepath=path)
@@ -94,7 +134,7 @@ class Steps:
             text = original_text(job)
             self.headers.append(text)
             return text
-        original_header = ui._draw_header
+        original_header = ui._draw_header_progress
         self.header_draws = 0
 
         def counting_header(panel, context):
@@ -103,10 +143,11 @@ class Steps:
             return original_header(panel, context)
         ui.draw_omis = counting_draw
         operators.progress_text = recording_text
-        ui._draw_header = counting_header
+        ui._draw_header_progress = counting_header
         self.plan = list(self.engine_steps('CYCLES', bpy.types.OMIS_PT_bake)) + \
             list(self.engine_steps('BLENDER_EEVEE', bpy.types.OMIS_PT_bake)) + \
-            list(self.bake_steps())
+            list(self.bake_steps()) + list(self.default_width_steps()) + \
+            list(self.header_steps())
 
     def redraw(self):
         window, area, region = properties_area()
@@ -176,6 +217,122 @@ class Steps:
                 return "again"
             U.check(self.job.cancelled, "Esc did not cancel the bake")
         return (invoke, progress, cancelled)
+
+    def fits(self, label):
+        """Every text of the panel fits its room in the default Properties editor."""
+        window, area, region = default_properties_area()
+        with bpy.context.temp_override(window=window, area=area, region=region):
+            too_long = panel_fit.overflows(ui.draw_omis, region.width)
+        print(f"{label}: region {region.width} px wide, texts too long: {too_long}", flush=True)
+        U.check(not too_long, f"{label}: texts wider than their room: {too_long}")
+
+    def redraw_all(self):
+        for area in bpy.context.window_manager.windows[0].screen.areas:
+            area.tag_redraw()
+
+    def default_width_steps(self):
+        """A bake with warnings from the Bake button, in the default Properties editor."""
+        def invoke():
+            U.ignored_settings_scene()
+            bpy.context.scene.omis.show_all_warnings = False
+            window, area, region = default_properties_area()
+            U.check(region.width < 400, f"the default Properties editor is {region.width} px")
+            with bpy.context.temp_override(window=window, area=area, region=region):
+                result = bpy.ops.omis.bake('INVOKE_DEFAULT', samples=16)
+            U.check(result == {'RUNNING_MODAL'}, f"invoke: {result}")
+
+        def finished():
+            if operators.running is not None:
+                return "again"
+            props = bpy.context.scene.omis
+            warnings = [w for w in props.last_warnings.split("\n") if w]
+            U.check(props.last_status == "complete" and len(warnings) > ui.FIRST_WARNINGS,
+                    f"the bake: {props.last_status}, warnings {warnings}")
+            scroll_to_end(default_properties_area)
+            self.draws = 0
+            self.redraw_all()
+
+        def folded():
+            if self.draws == 0:
+                return "again"
+            screenshot("panel_default_width", default_properties_area)
+            self.fits("warnings folded")
+            bpy.context.scene.omis.show_all_warnings = True
+            scroll_to_end(default_properties_area)
+            self.redraw_all()
+
+        def unfolded():
+            screenshot("panel_default_width_all_warnings", default_properties_area)
+            # The Outliner becomes an Info editor for a moment: the bake's reports.
+            info_area()[1].type = 'INFO'
+            self.redraw_all()
+            self.fits("warnings listed")
+            props = bpy.context.scene.omis
+            props.show_all_warnings = False
+
+        def reports():
+            """Each warning at WARNING level (the Info editor's screenshot shows their
+            icons), after the summary, and a warning last: the status bar's banner
+            shows the last report."""
+            screenshot("info_after_bake", info_area)
+            window, area, region = info_area()
+            with bpy.context.temp_override(window=window, area=area, region=region):
+                bpy.ops.info.select_all(action='SELECT')
+                bpy.ops.info.report_copy()
+            area.type = 'OUTLINER'
+            lines = bpy.context.window_manager.clipboard.strip().split("\n")
+            lines = lines[next(i for i, t in enumerate(lines) if t.startswith("bpy.ops.omis")):]
+            warnings = bpy.context.scene.omis.last_warnings.split("\n")
+            summary = next(i for i, t in enumerate(lines) if t.startswith("omis bake: "))
+            print("reports:\n  " + "\n  ".join(lines), flush=True)
+            U.check(f"complete, with {len(warnings)} warnings" in lines[summary], lines[summary])
+            U.check(lines[summary + 1:-1] == warnings, "the warnings do not follow the summary")
+            U.check(lines[-1].startswith(f"omis bake complete, with {len(warnings)} warnings"),
+                    f"the last report is not the warnings' summary: {lines[-1]}")
+        return (invoke, finished, folded, unfolded, reports)
+
+    def header_steps(self):
+        """The header while baking and a wrapped refusal, in the default Properties editor."""
+        def start():
+            # A shorter panel (no Last bake box) keeps its header in view while baking.
+            props = bpy.context.scene.omis
+            props.last_status = ""
+            window, area, region = default_properties_area()
+            with bpy.context.temp_override(window=window, area=area, region=region):
+                result = bpy.ops.omis.bake('INVOKE_DEFAULT', samples=10 ** 6, time_budget=60.0)
+            U.check(result == {'RUNNING_MODAL'}, f"invoke: {result}")
+            self.job = operators.running
+            self.header_draws = 0
+            scroll_to_end(default_properties_area)
+
+        def header():
+            self.redraw_all()
+            job = self.job
+            if job.fraction <= 0 or self.header_draws < 2 or job.seconds_left() is None:
+                return "again"
+            screenshot("baking_default_width", default_properties_area)
+            window, area, region = default_properties_area()
+            text = operators.header_text(job)
+            needed, room = panel_fit.header_fits(bpy.types.OMIS_PT_bake.bl_label, text,
+                                                 region.width)
+            print(f"header while baking: {text!r}, {needed:.0f} of {room:.0f} px", flush=True)
+            U.check(needed <= room, f"the header needs {needed:.0f} px of {room:.0f}")
+            window.event_simulate(type='ESC', value='PRESS')
+            window.event_simulate(type='ESC', value='RELEASE')
+
+        def cancelled():
+            if operators.running is not None:
+                return "again"
+            U.check(self.job.cancelled, "Esc did not cancel the bake")
+            # A refusal, wrapped: Selected to Active.
+            bpy.context.scene.render.bake.use_selected_to_active = True
+            self.redraw_all()
+
+        def refusal():
+            screenshot("refusal_default_width", default_properties_area)
+            self.fits("refusal")
+            bpy.context.scene.render.bake.use_selected_to_active = False
+        return (start, header, cancelled, refusal)
 
     def __call__(self):
         try:
