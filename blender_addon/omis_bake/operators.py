@@ -52,6 +52,8 @@ def accuracy_line(stats):
 def _report_stats(op, stats):
     for warning in stats["warnings"]:
         op.report({'WARNING'}, warning)
+    for line in job_module.buried_report(stats.get("buried_texels", {}), stats.get("target")):
+        op.report({'WARNING'}, line)
     if stats["images"]:
         op.report({'INFO'}, "Baked into " + ", ".join(f'"{n}"' for n in stats["images"])
                   + ": save the images or pack them")
