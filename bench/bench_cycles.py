@@ -8,7 +8,8 @@
 Scenes: every scene of the Cycles-agreement suite (tests/blender/cycles_scenes.py
 SCENES, read at start-up; EXCLUDED lists those where omis and Cycles differ by
 design, e.g. spot_radius) plus the demo room (scripts/blender_demo.py), each
-baked into one float image.
+baked into its float images (one per object where a scene gives each its own
+lightmap: they are compared as one, stacked).
 
 Per scene:
 - Cycles: Diffuse bake, pass filter {DIRECT}, denoising and adaptive sampling
@@ -83,14 +84,19 @@ def grey(image):
     return U.pixels(image)[..., :3].astype(np.float64).mean(axis=2)
 
 
-def cycles_run(objects, image, spp, seed):
-    U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
+def clear(images):
+    for image in images:
+        U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
+
+
+def cycles_run(objects, images, spp, seed):
+    clear(images)
     seconds = U.cycles_bake(objects, int(spp), seed)
-    return grey(image), seconds
+    return U.stacked([grey(image) for image in images]), seconds
 
 
-def omis_run(objects, image, strategy, seed, seconds=0.0, samples=1 << 30):
-    U.set_pixels(image, (0.0, 0.0, 0.0, 0.0))
+def omis_run(objects, images, strategy, seed, seconds=0.0, samples=1 << 30):
+    clear(images)
     U.select_only(objects)
     overrides = {"samples": int(samples), "time_budget": float(seconds), "margin": 0,
                  "seed": int(seed), "use_noise_target": False, "technique_mode": 'AUTO',
@@ -106,10 +112,11 @@ def omis_run(objects, image, strategy, seed, seconds=0.0, samples=1 << 30):
     job.run()
     stats = job.finish(bpy.context)
     wall = time.perf_counter() - start
-    mask = np.zeros((image.size[1], image.size[0]), bool)
+    masks = {image.name: np.zeros((image.size[1], image.size[0]), bool) for image in images}
     for unit in job.units:
-        mask |= unit.mask > 0.5
-    return grey(image), wall, stats, mask
+        masks[unit.target.name] |= unit.mask > 0.5
+    return (U.stacked([grey(image) for image in images]), wall, stats,
+            U.stacked([masks[image.name] for image in images]))
 
 
 class Reference:
@@ -138,15 +145,15 @@ class Reference:
         return float(np.mean(self.var[m] / (r * r + self.eps2)))
 
 
-def calibrate_cycles(objects, image, quick):
+def calibrate_cycles(objects, images, quick):
     """Cycles' operator time as t0 + k·spp, from bakes at two sample counts."""
     lo, hi = (1, 16) if quick else (2, 64)
-    cycles_run(objects, image, 1, 99)                     # warm-up (kernels, caches)
-    _, t_lo = cycles_run(objects, image, lo, 98)
-    _, t_hi = cycles_run(objects, image, hi, 97)
+    cycles_run(objects, images, 1, 99)                     # warm-up (kernels, caches)
+    _, t_lo = cycles_run(objects, images, lo, 98)
+    _, t_hi = cycles_run(objects, images, hi, 97)
     if t_hi / t_lo < 2.0 and not quick:                   # overhead-dominated: go further
         hi *= 8
-        _, t_hi = cycles_run(objects, image, hi, 96)
+        _, t_hi = cycles_run(objects, images, hi, 96)
     k = max((t_hi - t_lo) / (hi - lo), 1e-6)
     t0 = max(t_lo - k * lo, 0.0)
     return t0, k
@@ -173,15 +180,15 @@ def run_scene(name, args):
     builder = SCENES[name]
     objects = builder(args.size)
     bpy.context.view_layer.update()
-    (image,) = cycles_scenes.images_of(objects)
+    images = cycles_scenes.images_of(objects)
 
-    t0, k = calibrate_cycles(objects, image, args.quick)
+    t0, k = calibrate_cycles(objects, images, args.quick)
     log(f"  Cycles: {t0:.3f} s overhead + {1e3 * k:.2f} ms per spp "
         f"({args.size}² image, {bpy.context.scene.cycles.device}, "
         f"{bpy.context.scene.render.threads} threads)")
 
     # omis' covered texels (the same UV islands Cycles bakes).
-    _, _, stats0, cover = omis_run(objects, image, "balance", 1, samples=1)
+    _, _, stats0, cover = omis_run(objects, images, "balance", 1, samples=1)
     mask = U.interior_texels(cover)
     plan = [line.strip() for line in (stats0["plan"] or "").splitlines()
             if line.strip().startswith(("+ ", "- "))]
@@ -190,11 +197,11 @@ def run_scene(name, args):
     # References.
     half = 0.5 * args.ref_seconds
     ref_spp = spp_for(half, t0, k)
-    a, ta = cycles_run(objects, image, ref_spp, 1001)
-    b, tb = cycles_run(objects, image, ref_spp, 1002)
+    a, ta = cycles_run(objects, images, ref_spp, 1001)
+    b, tb = cycles_run(objects, images, ref_spp, 1002)
     ref_c = Reference(a, b, mask)
-    a, ta2, sa, _ = omis_run(objects, image, "balance", 2001, seconds=half)
-    b, tb2, sb, _ = omis_run(objects, image, "balance", 2002, seconds=half)
+    a, ta2, sa, _ = omis_run(objects, images, "balance", 2001, seconds=half)
+    b, tb2, sb, _ = omis_run(objects, images, "balance", 2002, seconds=half)
     ref_o = Reference(a, b, mask)
     bias, agree = agreement(ref_c, ref_o, mask)
     log(f"  references: Cycles 2×{ref_spp} spp ({ta + tb:.1f} s, floor relMSE "
@@ -209,16 +216,16 @@ def run_scene(name, args):
         # --repeats: a cell is the mean over runs with their own seeds (docstring).
         for j in range(args.repeats):
             seed = 10 + i + 100 * j
-            x, t = cycles_run(objects, image, spp, seed)
+            x, t = cycles_run(objects, images, spp, seed)
             rel_mse, resolution = ref_c.rel_mse(x)
             runs["cycles"].append(dict(seconds=t, bake_seconds=t, samples_per_texel=spp,
                                        rel_mse=rel_mse, resolution=resolution))
             for strategy, label in (("balance", "omis balance"),
                                     ("optimal-direct", "omis optimal")):
                 if args.equal_samples:  # Cycles' sample count, no time limit
-                    x, t, s, _ = omis_run(objects, image, strategy, seed + 10, samples=spp)
+                    x, t, s, _ = omis_run(objects, images, strategy, seed + 10, samples=spp)
                 else:
-                    x, t, s, _ = omis_run(objects, image, strategy, seed + 10, seconds=budget)
+                    x, t, s, _ = omis_run(objects, images, strategy, seed + 10, seconds=budget)
                 rel_mse, resolution = ref_o.rel_mse(x)
                 runs[label].append(dict(seconds=t, bake_seconds=s["bake_seconds"],
                                         samples_per_texel=s["samples_per_texel"],

@@ -82,6 +82,7 @@ public:
         d["draws"] = work.draws;
         d["draws_per_texel"] = work.drawsPerTexel;
         d["shadowed_texels"] = work.shadowedTexels;
+        d["buried_texels"] = omisGetBakeResultBuriedTexels(ref_.get());
         const size_t n = omisGetBakeResultPlan(ref_.get(), nullptr, 0);
         std::string plan(n + 1, '\0');
         omisGetBakeResultPlan(ref_.get(), &plan[0], plan.size());

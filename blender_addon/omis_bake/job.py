@@ -246,6 +246,7 @@ class BakeJob:
         mean_error = (sum(u.stats["mean_relative_error"] * u.stats.get("covered", 0)
                           for u in units) / covered) if covered else 0.0
         s = self.settings
+        buried = buried_texels(units)
         errors = self._errors()
         sampling = sum(u.stats.get("seconds", 0.0) for u in units)
         return {
@@ -261,6 +262,9 @@ class BakeJob:
             # draw more per sample (README, "Baking").
             "draws_per_texel": draws / covered if covered else 0.0,
             "shadowed_texels": sum(u.stats.get("shadowed_texels", 0) for u in units),
+            # Texels inside other geometry or on coinciding faces, per object
+            # (dark, as Cycles bakes them: overlapping props to look at).
+            "buried_texels": buried,
             "mean_relative_error": mean_error,
             # A noise threshold measures the error from independent streams;
             # otherwise each texel's one sequence leaves an upper estimate.
@@ -276,9 +280,30 @@ class BakeJob:
             "images": [t.name for t in self.export.images],
             "attributes": [f"{t.object_name}:{t.attribute_name}" for t in self.export.attributes],
             "units": [dict(u.stats, label=u.label) for u in units],
-            "warnings": list(self.export.warnings),
+            # Buried texels are warnings too: the panel, the reports and the
+            # status line list them with the exporter's.
+            "warnings": list(self.export.warnings) + buried_report(buried, s.target),
             "exported": dict(self.export.counts),
         }
+
+
+def buried_texels(units):
+    """{object name: texels (corners) lying inside other objects or on their faces}, for the
+    objects that have any, in bake order."""
+    out = {}
+    for u in units:
+        n = int(u.stats.get("buried_texels", 0))
+        if n:
+            out[u.part.object_name] = out.get(u.part.object_name, 0) + n
+    return out
+
+
+def buried_report(buried, target='IMAGE_TEXTURES'):
+    """One line per object of buried_texels(): 'N texels of "Crate.003" lie inside other
+    objects'."""
+    what = "texels" if target == 'IMAGE_TEXTURES' else "corners"
+    return [f'{n} {what} of "{name}" lie inside other objects (or on their faces): they bake '
+            f'dark, as in Cycles' for name, n in buried.items()]
 
 
 def texels_of(part, target):

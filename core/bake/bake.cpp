@@ -20,6 +20,7 @@
 #include "bake/uv_raster.h"
 #include "bake/vertex_points.h"
 #include "mis/allocation.h"
+#include "scene/surface_contacts.h"
 
 namespace omis {
 namespace {
@@ -31,13 +32,22 @@ using Clock = std::chrono::steady_clock;
 constexpr int kTile = 16;
 constexpr std::size_t kSetupTimingStride = 7;  // odd: not aligned with power-of-two rows
 
+// A point of triangle t that lies on another mesh's face has its rays stopped
+// there, as Cycles' do (scene/surface_contacts.h): it is moved behind both.
+SurfacePoint on_contact(SurfacePoint p, std::uint32_t t, const SurfaceContacts* contacts) {
+    if (contacts && contacts->on_other_surface(t, p.x) != SurfaceContacts::Contact::None)
+        p.x = SurfaceContacts::behind_contact(p.x, p.n, p.ng);
+    return p;
+}
+
 // A covered texel's footprint as a Footprint: positions and normals at the
 // barycentrics of texel_footprint (uv_raster.h).
 class TexelFootprint final : public Footprint {
 public:
-    TexelFootprint(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth)
+    TexelFootprint(const Mesh& mesh, const UvCoverage& cov, std::size_t i, bool smooth,
+                   const SurfaceContacts* contacts = nullptr)
         : mesh_(mesh), cov_(cov), i_(i), map_(mesh, cov, i),
-          ng_(mesh.geometric_normal(map_.triangle())), smooth_(smooth) {}
+          ng_(mesh.geometric_normal(map_.triangle())), smooth_(smooth), contacts_(contacts) {}
 
     SurfacePoint at(double u, double v) const override {
         const auto b = map_.barycentrics(u, v);
@@ -65,7 +75,7 @@ private:
         const std::uint32_t t = map_.triangle();
         Vec3 n = smooth_ ? mesh_.shading_normal(t, b1, b2) : ng_;
         if (!(length(n) > 0)) n = ng_;
-        return {mesh_.position(t, b1, b2), n, ng_};
+        return on_contact({mesh_.position(t, b1, b2), n, ng_}, t, contacts_);
     }
 
     // 4² texels a measurement: a 16th of the weights' cost (the spread and
@@ -78,6 +88,7 @@ private:
     TexelFootprintMap map_;
     Vec3 ng_;
     bool smooth_;
+    const SurfaceContacts* contacts_;  // the receiver's contacts (issue 32), if any
 };
 
 // One point per triangle corner, inside its triangle as Cycles places it
@@ -354,11 +365,14 @@ private:
     void forget_probe();
     void time_pass(std::uint32_t samples, double seconds);
     void write_outputs();
+    std::size_t count_buried() const;
     void fill_margin();
     void fill_stats();
 
     const Scene& scene_;
     const Mesh& mesh_;
+    SurfaceContacts contacts_;  // where the mesh lies on others' faces (issue 32)
+    std::size_t buried_ = 0;    // count_buried(), before any pass
     BakeSettings settings_;
     const BakeProgress& progress_;
     Clock::time_point start_;
@@ -434,6 +448,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
              Clock::time_point start)
     : scene_(scene),
       mesh_(scene.geometry().mesh(settings.mesh)),
+      contacts_(scene.geometry(), settings.mesh),
       settings_(with_receiver(scene, settings)),
       progress_(progress),
       start_(start),
@@ -448,6 +463,10 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     result_.width = layout_.width;
     result_.height = layout_.height;
     result_.value.assign(layout_.count * 3, 0.f);  // the running means
+    buried_ = count_buried();
+    // Corners on another mesh's face: moved behind it (on_contact).
+    for (std::size_t i = 0; i < layout_.points.size(); ++i)
+        layout_.points[i] = on_contact(layout_.points[i], std::uint32_t(i / 3), &contacts_);
     // Uncovered texels are never shaded: they count as done for the noise target.
     std::size_t to_shade = 0;
     for (std::size_t i = 0; i < layout_.count; ++i) {
@@ -537,7 +556,8 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
     shader.setup_timing.on = pass_count_ == 0 && i % kSetupTimingStride == 0;
     try {
         if (layout_.lightmap()) {
-            const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals);
+            const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals,
+                                           &contacts_);
             shader.shade(i, pass.first_round, pass.rounds, footprint.centre(), &footprint, r.value,
                          variance, pass.counts, own, streams, pass.earlier);
         } else {
@@ -1021,8 +1041,39 @@ void Baker::write_outputs() {
         ++n_covered;
     }
     stats.covered = n_covered;
+    stats.buried_texels = buried_;
     stats.mean_relative_error = n_covered ? sum_error / n_covered : 0;
     stats.passes_per_texel = n_covered ? sum_passes / n_covered : 0;
+}
+
+// Covered texels (corners) whose centre lies inside other geometry, or on a
+// face of another mesh turned its way (BakeStats::buried_texels). Only where
+// some geometry can occlude the points, and, but for contacts, only points in
+// another mesh's bounds trace (one ray where they are not inside).
+std::size_t Baker::count_buried() const {
+    if (!context_.plan.shadow_rays) return 0;
+    const GeometryScene& geometry = scene_.geometry();
+    std::atomic<std::size_t> buried{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout_.count, 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::size_t here = 0;
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            if (!layout_.covered(i)) continue;
+            SurfacePoint p;
+            std::uint32_t t;
+            if (layout_.lightmap()) {
+                p = TexelFootprint(mesh_, layout_.coverage, i, settings_.smooth_normals).centre();
+                t = layout_.coverage.triangle[i];
+            } else {  // before on_contact moves them
+                t = std::uint32_t(i / 3);
+                p = layout_.points[i];
+            }
+            here += contacts_.on_other_surface(t, p.x) == SurfaceContacts::Contact::Facing ||
+                    (contacts_.may_be_inside(p.x) && inside_other_geometry(geometry, p.x, p.n, p.ng));
+        }
+        buried.fetch_add(here, std::memory_order_relaxed);
+    });
+    return buried.load();
 }
 
 // The margin around UV islands: copies of the texels it extends.

@@ -69,6 +69,11 @@ struct BakeStats {
     double samples_per_texel = 0;      // mean over covered texels
     double draws_per_texel = 0;        // mean over covered texels
     std::size_t shadowed_texels = 0;
+    // Covered texels (corners, in vertex bakes) whose centre lies inside
+    // other geometry (rays from it meet back faces first) or on a face of
+    // another mesh turned its way (coinciding surfaces): dark, as Cycles
+    // bakes them, and worth an artist's look (overlapping props; issue 32).
+    std::size_t buried_texels = 0;
     double mean_relative_error = 0;    // estimated standard error / value, covered texels
     double max_relative_error = 0;
     int passes = 0;                    // passes started

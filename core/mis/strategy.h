@@ -1,6 +1,8 @@
 // MIS combination strategies (SPEC §1–§2) and their options.
 #pragma once
 
+#include <cstdint>
+
 #include <optional>
 #include <string>
 #include <string_view>
@@ -30,6 +32,12 @@ struct StrategyOptions {
     // (balance below) — since such draws err far less than the
     // independent-draw variances rule 3 compares.
     bool sequence_rounds = false;
+    // Bit k: technique k's density reaches directions where f is surely 0
+    // and where, rarely drawn, no sample may have landed (the bsdf technique
+    // of a scene without a world: directions beside every light). An exact
+    // fit that weighs such a density is not trusted (mis/estimator.cpp,
+    // exact_fit; issue 32).
+    std::uint32_t reaches_beyond_f = 0;
 };
 
 // Names are part of the interface (SPEC §6): "balance", "optimal-direct", ...

@@ -1380,6 +1380,10 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
         for (int k : active) n.push_back(counts[k]);
         StrategyOptions options = p_.settings.options;
         options.sequence_rounds = true;  // each technique draws one scrambled sequence
+        // Issue 32: without a world, bsdf draws beside every light, where f
+        // is 0 (mis/strategy.h, reaches_beyond_f).
+        for (std::size_t a = 0; a < active.size() && world_light_ == ~0u; ++a)
+            if (p_.settings.techniques[active[a]].bsdf) options.reaches_beyond_f |= 1u << a;
         // One technique: every weighting is 1 and the optimal α is the mean
         // itself, so each strategy's estimate is the plain mean of f/p, which
         // the balance heuristic forms without the optimal moments and solve

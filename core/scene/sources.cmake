@@ -4,5 +4,6 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/device.cpp
     ${CMAKE_CURRENT_LIST_DIR}/geometry_scene.cpp
     ${CMAKE_CURRENT_LIST_DIR}/emitter_shapes.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/surface_contacts.cpp
 )
 target_link_libraries(omis_core PUBLIC embree)

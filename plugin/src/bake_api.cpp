@@ -287,6 +287,12 @@ OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work) {
     });
 }
 
+OMIS_API uint64_t omisGetBakeResultBuriedTexels(OMISBakeResult result) {
+    return guarded<uint64_t>(0, [&] {
+        return uint64_t(checked(result, "result")->result.stats.buried_texels);
+    });
+}
+
 namespace {
 
 void to_c(const omis::HalvingPrediction& p, OMISBakeHalving& out) {

@@ -1,8 +1,9 @@
 """The scenes of the Cycles-agreement test (every light type, occluders, two
-objects sharing an image, emission and a world), shared with the equal-time
+objects sharing an image, emission and a world, interpenetrating objects with a
+lightmap each), shared with the equal-time
 benchmark (bench/bench_cycles.py). Each builder adds its objects to the current
-(reset) scene and returns the objects to bake; all of them bake into one image
-of `size`² texels.
+(reset) scene and returns the objects to bake, into one image of `size`² texels
+or (issue 32's scenes) an image per object.
 """
 
 import bpy
@@ -296,6 +297,100 @@ def scene_world_window(size=SIZE):
     return objs
 
 
+def _lightmapped_box(name, size, location, image_size, rotation=(0.0, 0.0, 0.0)):
+    """A box (Blender's cube: its own UV layout) baking into an image of its own."""
+    ob = U.add_box(name, size, location)
+    ob.rotation_euler = rotation
+    ob.data.materials.append(U.image_material(name + "Mat", U.make_image(name, image_size)))
+    return ob
+
+
+def scene_intersecting_boxes(size=SIZE):
+    # Issue 32: two unit boxes of one height standing on z = 0, one turned
+    # 30°, interpenetrating; each its own lightmap. Their tops are coplanar
+    # where they overlap (Cycles: dark, the other box's top stops every ray),
+    # and each has faces inside the other.
+    objs = [_lightmapped_box("BoxA", (1.0, 1.0, 1.0), (0.0, 0.0, 0.5), size),
+            _lightmapped_box("BoxB", (1.0, 1.0, 1.0), (0.55, 0.35, 0.5), size,
+                             rotation=(0.0, 0.0, U.deg(30)))]
+    U.add_light('POINT', "point", energy=600.0, location=(0.4, -1.6, 2.6),
+                shadow_soft_size=0.2)
+    U.add_light('AREA', "square", energy=200.0, location=(-1.4, 0.8, 1.8),
+                rotation=(U.deg(-30), U.deg(-40), 0), shape='SQUARE', size=0.5)
+    return objs
+
+
+def scene_box_in_floor(size=SIZE):
+    # Issue 32: a box sunk 0.2 m into the floor: the floor under it and the
+    # box's sides below the floor are inside the other; both baked.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2),
+            _lightmapped_box("SunkBox", (0.6, 0.5, 0.6), (0.2, -0.1, 0.1), size // 2,
+                             rotation=(0.0, 0.0, U.deg(20)))]
+    U.add_light('AREA', "square", energy=80.0, location=(-0.3, -0.5, 1.2),
+                rotation=(U.deg(20), U.deg(-15), 0), shape='SQUARE', size=0.6)
+    U.add_light('SUN', "sun", energy=2.0, rotation=(U.deg(35), U.deg(15), 0), angle=U.deg(5))
+    return objs
+
+
+def scene_wall_through_wall(size=SIZE):
+    # Issue 32: two 10 cm walls crossing like an X on a floor, each its own
+    # lightmap: each wall's faces inside the other are dark.
+    objs = [_lightmapped_box("WallA", (2.0, 0.1, 1.0), (0.0, 0.0, 0.5), size),
+            _lightmapped_box("WallB", (2.0, 0.1, 1.0), (0.0, 0.0, 0.5), size,
+                             rotation=(0.0, 0.0, U.deg(70)))]
+    U.grid_mesh("Floor", size=3.0, cuts=1)
+    U.add_light('AREA', "square", energy=150.0, location=(0.6, -0.9, 1.6),
+                rotation=(U.deg(35), U.deg(15), 0), shape='SQUARE', size=0.5)
+    U.add_light('POINT', "point", energy=200.0, location=(-0.8, 0.7, 1.4),
+                shadow_soft_size=0.1)
+    return objs
+
+
+def scene_thin_wall_rooms(size=SIZE):
+    # Issue 32: two rooms under one ceiling, parted by a 1 mm wall; a lamp
+    # lights the left one. The right room's floor (the same mesh as the
+    # left's) must stay black: no light through the thin wall or under it.
+    img = U.make_image("bake", size)
+    floor = receiver(img, size=2.0, cuts=2)
+    h = 1.0
+    for name, extent, center in (("wall_e", (0.1, 2.2, h), (1.05, 0, h / 2)),
+                                 ("wall_w", (0.1, 2.2, h), (-1.05, 0, h / 2)),
+                                 ("wall_n", (2.2, 0.1, h), (0, 1.05, h / 2)),
+                                 ("wall_s", (2.2, 0.1, h), (0, -1.05, h / 2)),
+                                 ("ceiling", (2.2, 2.2, 0.1), (0, 0, h + 0.05)),
+                                 ("parting", (0.001, 2.0, h), (0.2, 0, h / 2))):
+        U.add_box(name, extent, center)
+    U.add_light('AREA', "lamp", energy=30.0, location=(-0.4, 0.0, 0.9), shape='SQUARE',
+                size=0.3)
+    U.add_light('POINT', "bulb", energy=20.0, location=(0.15, 0.3, 0.5), shadow_soft_size=0.02)
+    return [floor]
+
+
+def scene_blockout(size=SIZE):
+    # Issue 32: a level block-out — a floor and twelve crates of four sizes
+    # placed at random (fixed seed), several interpenetrating or sunk into the
+    # floor, some of one height side by side; a lightmap per object, baked as
+    # one selection, under a sun and two lamps.
+    import random
+    rng = random.Random(32)
+    img = U.make_image("bake", size)
+    objs = [receiver(img, name="Floor", size=4.0, cuts=3)]
+    for i in range(12):
+        side = rng.choice((0.4, 0.5, 0.6, 0.8))
+        x, y = rng.uniform(-1.4, 1.4), rng.uniform(-1.4, 1.4)
+        sink = rng.choice((0.0, 0.0, 0.1))
+        objs.append(_lightmapped_box(f"Crate.{i:03d}", (side, side, side),
+                                     (x, y, side / 2 - sink), max(8, size // 2),
+                                     rotation=(0.0, 0.0, rng.uniform(0.0, 3.14159))))
+    U.add_light('SUN', "sun", energy=2.0, rotation=(U.deg(40), U.deg(-20), U.deg(30)),
+                angle=U.deg(4))
+    U.add_light('AREA', "lamp", energy=300.0, location=(0.5, -0.8, 2.5),
+                rotation=(U.deg(10), 0, 0), shape='SQUARE', size=0.8)
+    U.add_light('POINT', "bulb", energy=150.0, location=(-1.0, 1.0, 1.5), shadow_soft_size=0.1)
+    return objs
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
@@ -313,6 +408,23 @@ SCENES = {
     "disk_near": scene_disk_near,
     "spread_walls": scene_spread_walls,
     "world_window": scene_world_window,
+    "intersecting_boxes": scene_intersecting_boxes,
+    "box_in_floor": scene_box_in_floor,
+    "wall_through_wall": scene_wall_through_wall,
+    "thin_wall_rooms": scene_thin_wall_rooms,
+    "blockout": scene_blockout,
+}
+
+# Objects of a scene that have texels inside other objects (or on their
+# faces), which a bake must report (BakeStats::buried_texels, issue 32); any
+# scene not listed has none.
+BURIED = {
+    "intersecting_boxes": {"BoxA", "BoxB"},
+    # The floor under the box; the box's faces below the floor lie under a
+    # single plane, not inside anything (dark all the same).
+    "box_in_floor": {"Receiver"},
+    "wall_through_wall": {"WallA", "WallB"},
+    "blockout": None,  # random placement: reported, not checked
 }
 
 

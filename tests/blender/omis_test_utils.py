@@ -321,6 +321,20 @@ class FakeLayout:
             object.__setattr__(self, name, value)
 
 
+def stacked(arrays):
+    """Several images' arrays (a lightmap per object) as one: stacked rows, each
+    framed by a row and column of zeros so that no texel counts another image's
+    as a neighbour (interior_texels, compare_to_cycles). Trailing dimensions
+    (channels) are kept."""
+    width = max(a.shape[1] for a in arrays) + 2
+    framed = []
+    for a in arrays:
+        f = np.zeros((a.shape[0] + 2, width) + a.shape[2:], a.dtype)
+        f[1:-1, 1:a.shape[1] + 1] = a
+        framed.append(f)
+    return np.concatenate(framed, axis=0)
+
+
 def interior_texels(mask):
     """The texels of `mask` whose 8 neighbours are in it too (and not on the
     image's rim): the benches compare these, away from the bake's margins."""

@@ -108,6 +108,23 @@ std::vector<Config> grazing_ellipse_configs() {
     return configs;
 }
 
+// Issue 32's near disks and an ellipse, a point on the floor below them: a
+// 0.5 m disk 5 cm up, on its axis and 0.45 m off it; a 1 m disk 1 cm up, 0.9 m
+// off axis; a 2 × 0.3 m ellipse 2 cm up. Each covers most of the hemisphere:
+// the area samplers' 1/pdf is heavy-tailed there.
+std::vector<Config> near_disk_configs() {
+    const Vec3 up{0, 0, 1};
+    std::vector<Config> configs = {
+        {"disk r 0.5 m, 5 cm up, on axis", {}, up, {0, 0, 0.05}, {0.5, 0, 0}, {0, 0.5, 0}},
+        {"disk r 0.5 m, 5 cm up, 0.45 m off axis", {}, up, {-0.45, 0, 0.05}, {0.5, 0, 0},
+         {0, 0.5, 0}},
+        {"disk r 1 m, 1 cm up, 0.9 m off axis", {}, up, {-0.9, 0, 0.01}, {1, 0, 0}, {0, 1, 0}},
+        {"ellipse 2 × 0.3 m, 2 cm up", {}, up, {-0.5, -0.1, 0.02}, {2, 0, 0}, {0, 0.3, 0}},
+    };
+    for (Config& c : configs) c.heavy_tailed = true;
+    return configs;
+}
+
 constexpr int K = 8;  // cells per parameter
 
 // Projected area (onto the unit-height plane along n) of a polygon given by offsets
@@ -596,6 +613,7 @@ TEST_CASE("ellipse samplers", "[sampling]") {
     int seed = 3000;
     std::vector<Config> configs = planar_configs();
     for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : near_disk_configs()) configs.push_back(c);
     for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};
@@ -609,6 +627,7 @@ TEST_CASE("ellipse solid-angle sampler (spherical ellipse)", "[sampling]") {
     int seed = 5000;
     std::vector<Config> configs = planar_configs();
     for (const Config& c : grazing_ellipse_configs()) configs.push_back(c);
+    for (const Config& c : near_disk_configs()) configs.push_back(c);
     for (const Config& c : configs) {
         INFO("config " << c.name);
         const EllipseLight L{c.c, c.U, c.V};

@@ -60,6 +60,7 @@ def test_lightmap_agrees_with_lambert():
     assert stats["samples_per_texel"] == pytest.approx(64, rel=0.01)
     # an unoccluded floor: no texel draws more than its schedule's samples
     assert stats["shadowed_texels"] == 0
+    assert stats["buried_texels"] == 0  # nothing else in the scene (issue 32)
     assert stats["draws"] == stats["samples"] and stats["draws_per_texel"] == stats["samples_per_texel"]
     assert "techniques" in stats["plan"]
 

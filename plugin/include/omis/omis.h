@@ -37,12 +37,13 @@
  *          object (omisNewDirectLighting, omisSetDirectLighting*,
  *          omisCommitDirectLighting, omisExecuteDirectLighting).
  *   0.2.1: omisGetBakeResultWork (OMISBakeWork: draws, drawsPerTexel,
- *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules. */
+ *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules.
+ *   0.2.2: omisGetBakeResultBuriedTexels. */
 #define OMIS_VERSION_MAJOR 0
 #define OMIS_VERSION_MINOR 2
-#define OMIS_VERSION_PATCH 1
+#define OMIS_VERSION_PATCH 2
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
-#define OMIS_VERSION_STRING "0.2.1"
+#define OMIS_VERSION_STRING "0.2.2"
 
 /* Limits of every MIS system: techniques combined, channels per sample. */
 #define OMIS_MAX_TECHNIQUES 32
@@ -416,6 +417,12 @@ typedef struct OMISBakeWork {
     uint64_t shadowedTexels; /* texels drawing the extra draws */
 } OMISBakeWork;
 OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work);
+/* Baked texels (corners, in vertex bakes) whose centre lies inside other
+ * geometry (rays from it meet the back of a surface first) or on a face of
+ * another mesh turned its way (coinciding surfaces). They bake dark, as in
+ * Cycles; an artist usually wants to know (overlapping props). 0.2.2; 0 on
+ * error (omisGetError). */
+OMIS_API uint64_t omisGetBakeResultBuriedTexels(OMISBakeResult result);
 
 /* The bake's convergence: one record per completed pass. Passes are taken when
  * a time or noise budget is set ("timeBudget", "noiseTarget"); a bake with a
