@@ -1,0 +1,190 @@
+// PointLighting: shade() = the point's setup, its rounds of samples, its
+// estimate; and the public class over Impl.
+#include "render/point_lighting_impl.h"
+
+namespace omis {
+
+void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
+                                const SurfacePoint& centre, const Footprint* footprint,
+                                const int* counts_in, double* value, double* variance,
+                                double* own_variance_out, StreamEstimates* streams,
+                                const std::vector<DrawnRounds>* earlier) {
+    const int* counts = counts_in ? counts_in : p_.settings.samples.data();
+    ++point_serial_;  // invalidates the per-point solid-angle cache
+    Active& active = active_scratch_;
+    active.clear();
+    // Bakes shade a texel again at each pass (and a footprint's tables cost).
+    active_for(stream, footprint || first_round > 0, centre, footprint, active);
+    set_hidden_part(active);
+    // A shadowed texel (shadowed_draws) draws m times every count, at every
+    // pass: its draw indices are m times those of the counts.
+    const int m = draws_per_count_ = active.draws_per_count;
+    if (m > 1) {
+        scaled_counts_.assign(counts, counts + p_.settings.samples.size());
+        for (int& n : scaled_counts_) n *= m;
+        counts = scaled_counts_.data();
+    }
+
+    // Round r belongs to stream r mod K; each (technique, stream) has its own
+    // scrambled sequence, continued from round to round. Delta lights, when
+    // positions vary, take one position per round from a sequence of their own.
+    const int K = p_.settings.streams;
+    const std::uint64_t base = mix64(p_.settings.seed ^ mix64(stream));
+    const std::size_t delta_group = p_.settings.techniques.size();
+    sequence_base_ = base;
+    forget_sequences(technique_sequences_, (delta_group + 1) * std::size_t(K));
+    set_draw_starts(first_round, earlier);
+    if (m > 1)
+        for (std::uint32_t& start : draw_start_) start *= std::uint32_t(m);
+    LightStreams light_streams(*this, base, stream, active);
+    const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
+    Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
+    set_up_estimators(active, plan, counts, counts_in != nullptr || m > 1, all, per);
+
+    // Delta lights are evaluated once per round where positions vary or lights
+    // are drawn, else once at the centre.
+    DeltaSums delta;
+    delta.per_round = !p_.delta.empty() && (footprint || p_.plan.sample_delta_lights);
+    const bool by_stream_only = plan.by_stream && !plan.in_whole;
+    ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
+                                                                 : nullptr);
+    // Technique k's draw j of round r: its index in its stream's sequence.
+    auto index_of = [&](int k, int r, int j) {
+        const int s = r % K;
+        return draw_start(k, s) +
+               (std::uint32_t(r / K) - std::uint32_t(rounds_in_stream(s, first_round, K))) *
+                   std::uint32_t(counts[k]) +
+               std::uint32_t(j);
+    };
+    // Techniques whose lights come from a selector: each sample's light is
+    // drawn into selector_draws_[now], and among many lights begun two
+    // samples ahead and finished one ahead, in the slots after it
+    // (SelectorDraw).
+    auto draws_ahead = [&](int k) {
+        return !p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
+    };
+    int now = 0;
+    for (SelectorDraw& d : selector_draws_) d.k = -1;  // last call's: other sequences
+    // Moves (r, a, j) to the sample after it in the loop's order; false past
+    // the call's last.
+    auto advance = [&](int& r, std::size_t& a, int& j) {
+        ++j;
+        while (j >= counts[active.all[a]]) {
+            j = 0;
+            if (++a == active.all.size()) {
+                a = 0;
+                if (++r == first_round + rounds) return false;
+            }
+        }
+        return true;
+    };
+    // Finishes the light of the sample after (r, a, j) and begins the one
+    // after that.
+    auto draw_after = [&](int r, std::size_t a, int j) {
+        if (!advance(r, a, j)) return;
+        int k = active.all[a];
+        if (draws_ahead(k)) {
+            SelectorDraw& next = selector_draws_[(now + 1) % kSelectorDraws];
+            const ScrambledSobol& seq = technique_sequence(std::size_t(k), r % K);
+            const std::uint32_t index = index_of(k, r, j);
+            if (next.is(k, seq, index)) finish_selector_draw(next);
+            else draw_selector(k, seq, index, centre, footprint, next);
+            if (next.light) prefetch_light(next.light->light);
+        }
+        if (!advance(r, a, j)) return;
+        k = active.all[a];
+        if (!draws_ahead(k)) return;
+        begin_selector_draw(k, technique_sequence(std::size_t(k), r % K), index_of(k, r, j),
+                            centre, footprint, selector_draws_[(now + 2) % kSelectorDraws]);
+    };
+    for (int r = first_round; r < first_round + rounds; ++r) {
+        const int s = r % K;
+        const std::uint32_t round_in_stream = std::uint32_t(r / K);
+        if (delta.per_round) {
+            const ScrambledSobol& seq = technique_sequence(delta_group, s);
+            SurfacePoint at = centre;
+            if (footprint) {
+                double fu, fv;
+                seq.get_2d(round_in_stream, 0, fu, fv);
+                at = footprint->at(fu, fv);
+            }
+            const Vec3 d = delta_lighting(at, seq.get_1d(round_in_stream, 1));
+            delta.sum[s] += d;
+            delta.sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
+        }
+        const Estimators into[2] = {all, per[s]};
+        if (plan.in_whole && !active.all.empty()) set_stream(all, s);
+        for (std::size_t a = 0; a < active.all.size(); ++a) {
+            const int k = active.all[a];
+            const ScrambledSobol& seq = technique_sequence(std::size_t(k), s);
+            const bool table = light_streams.uses_table(k);
+            const bool from_selector = draws_ahead(k);
+            for (int j = 0; j < counts[k]; ++j) {
+                const std::uint32_t index = index_of(k, r, j);
+                SelectorDraw* selected = nullptr;
+                if (from_selector) {
+                    selected = &selector_draws_[now];
+                    if (!selected->is(k, seq, index))
+                        draw_selector(k, seq, index, centre, footprint, *selected);
+                    finish_selector_draw(*selected);  // (done a sample ahead)
+                }
+                if (draw_next_ahead_) draw_after(r, a, j);
+                take_sample(active, a, seq, index, centre, footprint, into,
+                            by_stream_only ? 2 : 1,
+                            table ? light_streams.draw(k, s, seq, index) : TableDraw{}, selected);
+                now = (now + 1) % kSelectorDraws;
+            }
+        }
+    }
+    rounds_timer.stop();
+    light_streams.keep();
+    if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
+
+    Vec3 own_variance, error_variance;
+    if (streams) *streams = StreamEstimates{};
+    const Vec3 total =
+        point_estimate(active, plan, all, per, delta, own_variance, error_variance, streams);
+    for (int c = 0; c < 3; ++c) {
+        value[c] = total[c];
+        if (variance) variance[c] = error_variance[c];
+        if (own_variance_out) own_variance_out[c] = own_variance[c];
+    }
+}
+
+PointLighting::PointLighting(const LightingContext& context)
+    : impl_(std::make_unique<Impl>(context, counters)) {
+    impl_->setup_timing_ = &setup_timing;
+}
+PointLighting::~PointLighting() = default;
+PointLighting::PointLighting(PointLighting&& other) noexcept
+    : counters(other.counters), setup_timing(other.setup_timing), impl_(std::move(other.impl_)) {
+    if (impl_) impl_ = std::make_unique<Impl>(impl_->p_, counters);
+    if (impl_) impl_->setup_timing_ = &setup_timing;
+}
+
+void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
+                          const SurfacePoint& centre, const Footprint* footprint,
+                          double value[3], double variance[3], const int* counts,
+                          double own_variance[3], StreamEstimates* streams,
+                          const std::vector<DrawnRounds>* earlier) {
+    ScopedTimer timer(setup_timing.on ? &setup_timing.shading : nullptr);
+    impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
+                 own_variance, streams, earlier);
+}
+
+int PointLighting::draws_per_count() const { return impl_->draws_per_count_; }
+
+void PointLighting::record_into(AllocationPilot* pilot) {
+    if (pilot && pilot->num_techniques() != int(impl_->p_.settings.techniques.size()))
+        throw std::invalid_argument("pilot: expected one technique per settings technique");
+    impl_->pilot_ = pilot;
+}
+
+void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
+                          const Vec3& n, const Vec3& ng, double value[3],
+                          double variance[3]) {
+    impl_->shade(stream, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
+                 variance, nullptr, nullptr, nullptr);
+}
+
+}  // namespace omis
