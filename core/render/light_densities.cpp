@@ -155,7 +155,7 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
         }
         return pdf;
     }
-    const LightChoice& c = choices_[k];
+    const LightTable& c = tables_[k];
     double pdf = 0;
     if (p_.settings.fast_paths && (along_is(x, w) || c.lights.size() > kFewTableLights)) {
         // As the selectors: only lights along w have a density there (the

@@ -9,6 +9,8 @@
 
 #if defined(__SSE__)
 #include <xmmintrin.h>
+
+#include "sampling/discrete.h"
 #endif
 
 namespace omis {
@@ -300,25 +302,11 @@ LightSelector::LightSelector(Kind kind, const std::vector<Light>& lights,
         per_light_[id].role = PerLight::Selected;
     }
     if (kind_ == Kind::Power) {
-        double largest = 0;
-        for (std::uint32_t id : ids_) {
-            probability_.push_back(lights[id].power(scene_radius));
-            largest = std::max(largest, probability_.back());
-        }
-        // A light whose power rounds to zero keeps a tiny share, so every
-        // direction a light covers stays sampleable.
-        double total = 0;
-        for (double& w : probability_) {
-            if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
-            total += w;
-        }
-        double running = 0;
-        for (std::size_t i = 0; i < ids_.size(); ++i) {
-            per_light_[ids_[i]].weight = probability_[i] /= total;
-            running += probability_[i];
-            cdf_.push_back(running);
-        }
-        if (!cdf_.empty()) cdf_.back() = 1.0;
+        for (std::uint32_t id : ids_) probability_.push_back(lights[id].power(scene_radius));
+        // A light whose power rounds to zero keeps a tiny share.
+        normalise_weights(probability_);
+        for (std::size_t i = 0; i < ids_.size(); ++i) per_light_[ids_[i]].weight = probability_[i];
+        cumulate(probability_, cdf_);
     }
     if (kind_ == Kind::Tree) {
         std::vector<Entry> entries;

@@ -1,6 +1,11 @@
 // Per-point light tables: the lights a table technique may pick at a point
 // (or over a footprint's probes) with their probabilities and CDF, the
 // defensive mixture, and the weights measured at a footprint's anchor.
+#include "render/light_tables.h"
+
+#include <cmath>
+#include <limits>
+
 #include "render/point_lighting_impl.h"
 
 namespace omis {
@@ -10,44 +15,31 @@ namespace omis {
 // no per-point setup; otherwise a table over the lights that reach x is made
 // here (`unoccluded`: by their exact unoccluded irradiance). A technique
 // with no light to draw at x leaves the point's MIS system.
-bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
-    const Technique& t = p_.settings.techniques[k];
-    if (const LightSelector* s = p_.selector(t.selection)) {
+bool LightTables::make_at(int k, const Vec3& x, const Vec3& n) {
+    const Technique& t = context_.settings.techniques[k];
+    if (const LightSelector* s = context_.selector(t.selection)) {
         if (s->empty() || !s->may_reach(x, n)) return false;
-        if (p_.integrated.size() > std::size_t(kManyIntegratedLights)) return true;
-        for (std::uint32_t l : p_.integrated)
-            if (sampler_applies(p_.scene.lights()[l], t.sampler, x, n)) return true;
+        if (context_.integrated.size() > std::size_t(kManyIntegratedLights)) return true;
+        for (std::uint32_t l : context_.integrated)
+            if (sampler_applies(context_.scene.lights()[l], t.sampler, x, n)) return true;
         return false;
     }
-    LightChoice& c = choices_[k];
+    LightTable& c = tables_[std::size_t(k)];
     c.lights.clear();
     c.probability.clear();
-    c.cdf.clear();
-    double total = 0, largest = 0;
-    for (std::uint32_t l : p_.integrated) {
-        const Light& light = p_.scene.lights()[l];
+    for (std::uint32_t l : context_.integrated) {
+        const Light& light = context_.scene.lights()[l];
         if (!sampler_applies(light, t.sampler, x, n)) continue;
         double w = 1.0;
-        if (t.selection == LightSelection::Power) w = p_.power[l];
+        if (t.selection == LightSelection::Power) w = context_.power[l];
         if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
             w = unoccluded_irradiance(light, x, n);
         c.lights.push_back(l);
         c.probability.push_back(w);
-        largest = std::max(largest, w);
     }
-    // A light that reaches x but whose weight rounds to zero keeps a tiny share,
-    // so every direction the integrand covers stays sampleable.
-    for (double& w : c.probability) {
-        if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
-        total += w;
-    }
-    double running = 0;
-    for (double& w : c.probability) {
-        w /= total;
-        running += w;
-        c.cdf.push_back(running);
-    }
-    if (!c.cdf.empty()) c.cdf.back() = 1.0;
+    // A light that reaches x but whose weight rounds to zero keeps a tiny share.
+    normalise_weights(c.probability);
+    cumulate(c.probability, c.cdf);
     if (t.selection == LightSelection::Defensive) {
         reaches_.assign(c.lights.size(), 1);  // the table holds the lights that reach x
         mix_in_uniform(k);
@@ -70,29 +62,27 @@ bool PointLighting::Impl::choose_lights(int k, const Vec3& x, const Vec3& n) {
 // first pass: kept[i] = 1 + the probes light i weighs over (n_probes where
 // it reaches the centre), 0 before. The weights then take the same sums in
 // the same order: the same table, bit for bit, without probing again.
-bool PointLighting::Impl::choose_lights_over(int k, Probes& probes, std::uint8_t* kept) {
+bool LightTables::make_over(int k, FootprintProbes& probes, std::uint8_t* kept) {
     const int n_probes = probes.count();
-    const Technique& t = p_.settings.techniques[k];
-    LightChoice& c = choices_[k];
+    const Technique& t = context_.settings.techniques[k];
+    LightTable& c = tables_[std::size_t(k)];
     c.lights.clear();
     c.probability.clear();
-    c.cdf.clear();
     auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
-        if (t.selection == LightSelection::Power) return p_.power[l];
+        if (t.selection == LightSelection::Power) return context_.power[l];
         if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
-            return unoccluded_irradiance(p_.scene.lights()[l], p.x, p.n);
+            return unoccluded_irradiance(context_.scene.lights()[l], p.x, p.n);
         return 1.0;
     };
     const bool by_irradiance =
         t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive;
     bool any = false;
-    double largest = 0;
-    reaches_.assign(p_.integrated.size(), 0);
+    reaches_.assign(context_.integrated.size(), 0);
     if (by_irradiance) kept = nullptr;
     const bool from_kept = kept && kept[0] != 0;
-    for (std::size_t i = 0; i < p_.integrated.size(); ++i) {
-        const std::uint32_t l = p_.integrated[i];
-        const Light& light = p_.scene.lights()[l];
+    for (std::size_t i = 0; i < context_.integrated.size(); ++i) {
+        const std::uint32_t l = context_.integrated[i];
+        const Light& light = context_.scene.lights()[l];
         double w = 0;
         if (from_kept) {
             const int reached = kept[i] - 1;
@@ -118,20 +108,10 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes, std::uint8_t
         any = any || reaches_[i];
         c.lights.push_back(l);
         c.probability.push_back(w);
-        largest = std::max(largest, w);
     }
     if (!any) return false;
-    double total = 0, running = 0;
-    for (double& w : c.probability) {
-        if (!(w > 0)) w = largest > 0 ? 1e-9 * largest : 1.0;
-        total += w;
-    }
-    for (double& w : c.probability) {
-        w /= total;
-        running += w;
-        c.cdf.push_back(running);
-    }
-    c.cdf.back() = 1.0;
+    normalise_weights(c.probability);
+    cumulate(c.probability, c.cdf);
     if (t.selection == LightSelection::Defensive) mix_in_uniform(k);
     return true;
 }
@@ -154,14 +134,14 @@ bool PointLighting::Impl::choose_lights_over(int k, Probes& probes, std::uint8_t
 // as a light drawn a few percent of the time is missed by most texels' first
 // draws); emission_world with a world 10× as bright (then the main light, in
 // the open) 0.41/0.48/0.49 at 4/16/256 spp (`unoccluded` 0.28/0.38/0.39).
-void PointLighting::Impl::mix_in_uniform(int k) {
-    LightChoice& c = choices_[k];
+void LightTables::mix_in_uniform(int k) {
+    LightTable& c = tables_[std::size_t(k)];
     const std::vector<char>& reaches = reaches_;
     int reaching = 0;
     bool world = false;
     for (std::size_t i = 0; i < c.lights.size(); ++i) {
         reaching += reaches[i];
-        world = world || p_.scene.lights()[c.lights[i]].type == LightType::World;
+        world = world || context_.scene.lights()[c.lights[i]].type == LightType::World;
     }
     if (reaching == 0) return;
     const double uniform = world ? kDefensiveShareWithWorld : 0.5;
@@ -178,7 +158,7 @@ void PointLighting::Impl::mix_in_uniform(int k) {
 
 // The anchor of the footprint being set up; its weights are kept while the
 // next footprints name the same anchor (a block's texels, shaded in a row).
-void PointLighting::Impl::set_anchor(const Footprint* footprint) {
+void LightTables::set_anchor(const Footprint* footprint) {
     Footprint::Anchor a;
     anchor_ = nullptr;
     if (!footprint || !footprint->table_anchor(a)) return;
@@ -195,21 +175,35 @@ void PointLighting::Impl::set_anchor(const Footprint* footprint) {
     next_anchor_slot_ = (next_anchor_slot_ + 1) % kAnchorSlots;
     anchor_->used = true;
     anchor_->anchor = a;
-    anchor_->irradiance.assign(p_.integrated.size(), std::numeric_limits<double>::quiet_NaN());
+    anchor_->irradiance.assign(context_.integrated.size(), std::numeric_limits<double>::quiet_NaN());
 }
 
 // The `unoccluded` weight of integrated light i for a footprint whose centre
 // it reaches: its unoccluded irradiance at the anchor when it reaches that,
 // else at the centre. A function of the anchor and the centre only, so every
 // pass and thread makes the same table.
-double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& centre) {
-    const Light& light = p_.scene.lights()[p_.integrated[i]];
+double LightTables::centre_weight(std::size_t i, const SurfacePoint& centre) {
+    const Light& light = context_.scene.lights()[context_.integrated[i]];
     if (anchor_) {
         double& w = anchor_->irradiance[i];
         if (std::isnan(w)) w = unoccluded_irradiance(light, anchor_->anchor.at.x, anchor_->anchor.at.n);
         if (w > 0) return w;
     }
     return unoccluded_irradiance(light, centre.x, centre.n);
+}
+
+void LightTables::restore(int k, const std::vector<std::uint32_t>& lights,
+                          const std::vector<double>& probability) {
+    LightTable& c = tables_[std::size_t(k)];
+    c.lights = lights;
+    c.probability = probability;
+    cumulate(c.probability, c.cdf);
+}
+
+std::size_t LightTables::longest() const {
+    std::size_t n = 0;
+    for (const LightTable& c : tables_) n = std::max(n, c.lights.size());
+    return n;
 }
 
 }  // namespace omis

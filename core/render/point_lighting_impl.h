@@ -5,6 +5,7 @@
 #pragma once
 
 #include "render/direct_lighting.h"
+#include "render/light_tables.h"
 
 #include <algorithm>
 #include <atomic>
@@ -113,17 +114,11 @@ private:
 // over every light the arithmetic (16 lights: 1.09x the time without it).
 constexpr std::size_t kMaxTinyShapeTable = 4096;
 
-// A light technique at one point (`unoccluded`, exact per light): the lights
-// it may pick and their CDF.
-struct LightChoice {
-    std::vector<std::uint32_t> lights;
-    std::vector<double> probability, cdf;
-};
 
 
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
-        : p_(context), counters(counters), choices_(context.settings.techniques.size()) {
+        : p_(context), counters(counters), tables_(context) {
         // Where each table technique's counts lie among a point's kept ones
         // (LightingContext::keep_draw_counts' layout).
         // Likewise their probes' reach (LightingContext::keep_table_reach's).
@@ -165,8 +160,7 @@ struct PointLighting::Impl {
     Active active_scratch_;
     std::vector<int> scaled_counts_;  // shade's counts × draws_per_count
     int draws_per_count_ = 1;         // the last point shaded's (PointLighting::draws_per_count)
-    class Probes;
-    void choose_active(std::uint64_t point, Probes& probes, const Footprint* footprint,
+    void choose_active(std::uint64_t point, FootprintProbes& probes, const Footprint* footprint,
                        Active& active);
     // settings.shadowed_draws where centre_in_shadow, else 1; from the
     // context's shadow_verdicts where the job keeps them.
@@ -434,57 +428,6 @@ struct PointLighting::Impl {
         if (impl.p_.tree_selector) impl.p_.tree_selector->prefetch(l);
     }
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
-    bool choose_lights(int k, const Vec3& x, const Vec3& n);
-    // choose_lights' per-point table for a whole footprint (its probes: the
-    // centre and corners), so a light that reaches part of a texel keeps its
-    // share wherever in the texel it was probed.
-    // A footprint's probes for its tables and region: the centre, and its
-    // corners made only when first asked (most lights reach the centre, and
-    // then no corner is looked at).
-    class Probes {
-    public:
-        Probes(const SurfacePoint& centre, const Footprint* footprint)
-            : footprint_(footprint), corners_ready_(!footprint) {
-            p_[0] = centre;
-        }
-        int count() const { return footprint_ ? 5 : 1; }
-        const SurfacePoint& operator[](int i) {
-            if (i > 0 && !corners_ready_) {
-                int j = 1;
-                for (double u : {0.0, 1.0})
-                    for (double v : {0.0, 1.0}) p_[j++] = footprint_->at(u, v);
-                corners_ready_ = true;
-            }
-            return p_[i];
-        }
-
-    private:
-        const Footprint* footprint_;
-        bool corners_ready_;
-        SurfacePoint p_[5];
-    };
-    // kept: the point's reach for technique k (LightingContext::table_reach),
-    // null where none is kept.
-    bool choose_lights_over(int k, Probes& probes, std::uint8_t* kept);
-    // reaches_: per slot of technique k's table, whether its light reaches
-    // some probe (as the table's maker found).
-    void mix_in_uniform(int k);
-    std::vector<char> reaches_;
-    // `unoccluded` weights at the footprint's anchor (Footprint::table_anchor),
-    // shared by the texels of its block: kept for the last kAnchorSlots
-    // anchors seen (a tile's row of texels crosses several blocks), per
-    // integrated light (index into p_.integrated), NaN until asked.
-    struct AnchorWeights {
-        bool used = false;
-        Footprint::Anchor anchor;
-        std::vector<double> irradiance;
-    };
-    static constexpr int kAnchorSlots = 8;
-    AnchorWeights anchors_[kAnchorSlots];
-    AnchorWeights* anchor_ = nullptr;  // the footprint being set up's; null: none
-    int next_anchor_slot_ = 0;
-    void set_anchor(const Footprint* footprint);
-    double centre_weight(std::size_t i, const SurfacePoint& centre);
     // Every integrated light direction w from x may cross (a superset: area
     // lights from the Embree shape scene, plus the few unshaped ones).
     const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
@@ -538,7 +481,7 @@ struct PointLighting::Impl {
 
     const LightingContext& p_;
     LightingCounters& counters;
-    std::vector<LightChoice> choices_;  // per technique (light techniques only)
+    LightTables tables_;  // the point's, per light technique
     std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
     struct Hit {
         std::uint32_t light;
@@ -691,7 +634,7 @@ struct PointLighting::Impl {
     LightSelector::Memo region_memo_;
     // point: the shading's stream, whose radius the context may keep
     // (LightingContext::region_radii).
-    void set_region(std::uint64_t point, Probes& probes);
+    void set_region(std::uint64_t point, FootprintProbes& probes);
     LightSelector::Receiver receiver_at(const Vec3& x, const Vec3& n,
                                         LightSelector::Memo*& memo);
 };
@@ -788,7 +731,7 @@ private:
         return kept_ + impl_.kept_counts_at_[std::size_t(k)] + std::size_t(s) * lights;
     }
     std::size_t table_size(int k) const {
-        return std::min(impl_.choices_[k].lights.size(), impl_.p_.integrated.size());
+        return std::min(impl_.tables_[k].lights.size(), impl_.p_.integrated.size());
     }
     // The kept counts of technique k's stream s, where they count no more
     // than the `start` draws before this call (then a prefix of them): how
@@ -808,15 +751,10 @@ private:
     // the light tree, no table) would otherwise clear a vector that long at
     // every point and pass (16k triangles: ~0.4 s per pass at 128²).
     static std::size_t table_slots(const Impl& impl) {
-        std::size_t n = 0;
-        for (const LightChoice& c : impl.choices_) n = std::max(n, c.lights.size());
-        return n;
+        return impl.tables_.longest();
     }
     int slot(int k, const ScrambledSobol& seq, std::uint32_t index) const {
-        const LightChoice& c = impl_.choices_[k];
-        const double u = seq.get_1d(index, 1);
-        return int(std::min<std::size_t>(
-            std::upper_bound(c.cdf.begin(), c.cdf.end(), u) - c.cdf.begin(), c.lights.size() - 1));
+        return impl_.tables_[k].slot(seq.get_1d(index, 1));
     }
     std::size_t cell(int k, int s, int slot) const {
         return (std::size_t(k) * streams_ + std::size_t(s)) * lights_ + std::size_t(slot);

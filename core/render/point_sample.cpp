@@ -61,7 +61,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         ok = dot(w, p.n) > 0;
     } else {
         if (drawn.slot >= 0) {
-            const LightChoice& c = choices_[k];
+            const LightTable& c = tables_[k];
             light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
         } else {
             light = selected->light;

@@ -5,11 +5,11 @@
 
 namespace omis {
 
-void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
+void PointLighting::Impl::choose_active(std::uint64_t point, FootprintProbes& probes,
                                         const Footprint* footprint, Active& active) {
     // Light choice (which lights, with what probability) is made once per
     // point and kept for every sample of the footprint: per-point tables over
-    // the centre and corners together (choose_lights_over); selectors at the
+    // the centre and corners together (LightTables::make_over); selectors at the
     // centre — or, where no light applies there, at the first corner where
     // one does. A fixed choice is a valid technique at every position:
     // its density at a sample's own position x_s is Σ_l P(l) p_l(ω | x_s),
@@ -27,7 +27,7 @@ void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
                              (t.selection == LightSelection::Unoccluded ||
                               t.selection == LightSelection::Defensive));
     }
-    set_anchor(irradiance_tables ? footprint : nullptr);
+    tables_.set_anchor(irradiance_tables ? footprint : nullptr);
     if (p_.settings.shadowed_draws > 1) active.draws_per_count = draws_per_count_at(point, probes[0]);
     for (int k : p_.techniques) {
         const Technique& t = p_.settings.techniques[k];
@@ -35,10 +35,10 @@ void PointLighting::Impl::choose_active(std::uint64_t point, Probes& probes,
             bool reaches = false;
             if (footprint && !p_.selector(t.selection)) {
                 std::uint8_t* kept = p_.table_reach.of(point);
-                reaches = choose_lights_over(k, probes, kept ? kept + kept_reach_at_[k] : nullptr);
+                reaches = tables_.make_over(k, probes, kept ? kept + kept_reach_at_[k] : nullptr);
             } else {
                 for (int i = 0; i < n_probes && !reaches; ++i)
-                    reaches = choose_lights(k, probes[i].x, probes[i].n);
+                    reaches = tables_.make_at(k, probes[i].x, probes[i].n);
             }
             if (!reaches) continue;
             active.lights.push_back(k);
@@ -110,7 +110,7 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
 // the whole footprint where it is flat (a parallelogram); a sample outside
 // it (a footprint bent over a crease) is drawn for its own position.
 // Only selectors draw with it: without them the corners are not made here.
-void PointLighting::Impl::set_region(std::uint64_t point, Probes& probes) {
+void PointLighting::Impl::set_region(std::uint64_t point, FootprintProbes& probes) {
     const SurfacePoint& centre = probes[0];
     region_ = {centre.x, centre.n, 0.0};
     region_memo_.keep_in(p_.region_branching_of(point), p_.region_nodes);
@@ -150,7 +150,7 @@ LightSelector::Receiver PointLighting::Impl::receiver_at(const Vec3& x, const Ve
 
 void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
                                      const Footprint* footprint, Active& active) {
-    Probes probes(centre, footprint);
+    FootprintProbes probes(centre, footprint);
     set_region(stream, probes);
     TexelTables& kept = p_.texel_tables;
     keep = keep && !cheap_tables_;
@@ -174,7 +174,7 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
         std::count_if(active.lights.begin(), active.lights.end(), uses_table)));
     for (int k : active.lights)
         if (uses_table(k))
-            entry.tables.push_back({k, choices_[k].lights, choices_[k].probability});
+            entry.tables.push_back({k, tables_[k].lights, tables_[k].probability});
     // Without a table, only where the point has a slot of its own (a bake's
     // texels: the slot's bytes are spent anyway): choosing the techniques
     // again — a tree's bounds at the centre, the point's probes — was ~12 % of
@@ -189,7 +189,7 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
 }
 
 // choose_active's result from a kept entry: the same techniques in the same
-// order, and each table with the CDF choose_lights(_over) sums from it.
+// order, and each table with the CDF LightTables::make_at and make_over sums from it.
 void PointLighting::Impl::restore(const TexelTables::Entry& kept, Active& active) {
     active.mask = kept.mask;
     active.light_mask = kept.light_mask;
@@ -199,13 +199,7 @@ void PointLighting::Impl::restore(const TexelTables::Entry& kept, Active& active
         if (kept.light_mask & bit) active.lights.push_back(k);
     }
     for (const TexelTables::Table& t : kept.tables) {
-        LightChoice& c = choices_[t.technique];
-        c.lights = t.lights;
-        c.probability = t.probability;
-        c.cdf.clear();
-        double running = 0;
-        for (double w : c.probability) c.cdf.push_back(running += w);
-        c.cdf.back() = 1.0;
+        tables_.restore(t.technique, t.lights, t.probability);
     }
 }
 
