@@ -14,7 +14,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
     // Mesh lights whose bounding sphere w meets: the closest hit tells
     // whether their mesh is seen.
     bool meshes = false;
-    for (std::uint32_t l : lights_along(x, w)) {
+    for (std::uint32_t l : lights_along_.of(x, w)) {
         const Light& light = p_.scene.lights()[l];
         if (light.type == LightType::Mesh) {
             meshes = meshes || (luminance(light.emission) > 0 && mesh_light_along(light, x, w));
@@ -65,7 +65,7 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand(const Vec3& x, con
         if (!visible(h)) continue;
         (p_.scene.lights()[h.light].visible_to_bsdf ? f.main : f.hidden) += h.emitted.radiance;
     }
-    if (meshes) add_mesh_lights_seen(f, lights_along(x, w), blocker);
+    if (meshes) add_mesh_lights_seen(f, lights_along_.of(x, w), blocker);
     if (need_rays)
         split_world(f, x, w, blocker);
     // The receiver's closure (Lambert: cosθ/π), as Cycles' Diffuse bake sees it.
@@ -120,29 +120,22 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
     const auto& unshaped = p_.scene.unshaped_lights();
     const std::vector<std::uint32_t>* along = &clipped_;
     if (complete) {
-        // Every light along w: what lights_along(x, w) lists (the shapes the
+        // Every light along w: what lights_along_.of(x, w) lists (the shapes the
         // traversal crossed, the unshaped lights, the drawn light), kept for
         // the densities (technique_pdf) as it would keep its own.
         sort_unique(merged_);
         if (!unshaped.empty()) merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
-        if (drew_light && std::find(merged_.begin(), merged_.end(), drawn) == merged_.end())
-            merged_.push_back(drawn);
-        along_.x = x;
-        along_.w = w;
-        along_.valid = true;
-        ++along_serial_;
-        along_.lights.swap(merged_);
-        along = &along_.lights;
+        if (drew_light) add_if_missing(merged_, drawn);
+        along = &lights_along_.adopt(x, w, merged_);
     } else if (!blocker && shapes_in_geometry_) {
         // Nothing hit: no emissive triangle lies along w (but the drawn one,
         // where single precision missed its edge), only the unshaped lights.
         clipped_.assign(unshaped.begin(), unshaped.end());
-        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
-            clipped_.push_back(drawn);
+        if (drew_light) add_if_missing(clipped_, drawn);
     } else if (drew_light ? !hidden(p_.scene.lights()[drawn], drawn_distance) ||
                                 p_.scene.geometry().mesh(blocker->mesh).is_emissive()
                           : !blocker || p_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
-        along = &lights_along(x, w);
+        along = &lights_along_.of(x, w);
     } else {
         // Hidden: no light past the blocker is seen, at most
         // blocker->t / (1 − tolerance) + offset from x. The emitter shapes'
@@ -156,31 +149,26 @@ PointLighting::Impl::Integrand PointLighting::Impl::integrand_to_blocker(
         // by no shape: `hidden` below judges them by their distance.
         clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
         // As lights_along(): the drawn light surely lies along w.
-        if (drew_light && std::find(clipped_.begin(), clipped_.end(), drawn) == clipped_.end())
-            clipped_.push_back(drawn);
+        if (drew_light) add_if_missing(clipped_, drawn);
     }
     // The triangles' hit tests kept for their densities (Along::tests).
-    const bool keep_tests = along == &along_.lights;
-    if (keep_tests) {
-        along_.tests.resize(along->size());
-        along_.tested = along_serial_;
-    }
+    TriangleTest* tests = lights_along_.is_list(along) ? lights_along_.begin_tests() : nullptr;
     for (std::size_t i = 0; i < along->size(); ++i) {
         const Light& light = p_.scene.lights()[(*along)[i]];
         std::optional<Emitted> e;
         if (light.type == LightType::Mesh) {
-            if (keep_tests) along_.tests[i].known = false;
+            if (tests) tests[i].known = false;
             continue;  // below, from the blocker
         }
         if (light.type == LightType::Triangle) {
             // Hidden first: the triangles behind the blocker (a closed mesh's
             // far side, about one a sample) need no radiance.
             const auto hit = light.triangle.intersect(x, w);
-            if (keep_tests) along_.tests[i] = {true, hit};
+            if (tests) tests[i] = {true, hit};
             if (!hit || hidden(light, hit->t)) continue;
             e = triangle_emitted(light, w, hit->t);
         } else {
-            if (keep_tests) along_.tests[i].known = false;
+            if (tests) tests[i].known = false;
             e = emitted_radiance(light, x, w);
         }
         if (!e || !(luminance(e->radiance) > 0) || hidden(light, e->distance)) continue;

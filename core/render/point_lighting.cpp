@@ -10,7 +10,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                                 double* own_variance_out, StreamEstimates* streams,
                                 const std::vector<DrawnRounds>* earlier) {
     const int* counts = counts_in ? counts_in : p_.settings.samples.data();
-    ++point_serial_;  // invalidates the per-point solid-angle cache
+    shapes_.new_position();  // invalidates the per-position solid-angle cache
     Active& active = active_scratch_;
     active.clear();
     // Bakes shade a texel again at each pass (and a footprint's tables cost).

@@ -6,6 +6,8 @@
 
 #include "render/direct_lighting.h"
 #include "render/light_tables.h"
+#include "render/lights_along.h"
+#include "render/shape_draws.h"
 
 #include <algorithm>
 #include <atomic>
@@ -118,7 +120,8 @@ constexpr std::size_t kMaxTinyShapeTable = 4096;
 
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
-        : p_(context), counters(counters), tables_(context) {
+        : p_(context), counters(counters), tables_(context), shapes_(context),
+          lights_along_(context, shapes_, counters) {
         // Where each table technique's counts lie among a point's kept ones
         // (LightingContext::keep_draw_counts' layout).
         // Likewise their probes' reach (LightingContext::keep_table_reach's).
@@ -428,115 +431,30 @@ struct PointLighting::Impl {
         if (impl.p_.tree_selector) impl.p_.tree_selector->prefetch(l);
     }
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
-    // Every integrated light direction w from x may cross (a superset: area
-    // lights from the Embree shape scene, plus the few unshaped ones).
-    const std::vector<std::uint32_t>& lights_along(const Vec3& x, const Vec3& w);
-    // The shape pdf of each light in `along` = lights_along(x, w) (the
-    // caller's, got once) for `sampler`: kept for the direction, as
-    // techniques that share a sampler (tree/… and power/…) ask for the same
-    // values.
-    const std::vector<double>& shape_pdfs_along(const std::vector<std::uint32_t>& along,
-                                                ShapeSampler sampler, const Vec3& x,
-                                                const Vec3& n, const Vec3& w);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t key, const std::vector<int>& active,
                             const int* counts, bool fresh);
 
-    // Spherical rectangles/triangles and elliptic cones depend on the point
-    // only: build each once per point instead of once per sample and pdf
-    // evaluation (an ellipse's cone takes a Jacobi orthogonalisation: 39 % of a
-    // spread-disk bake when built per evaluation). Skipped for scenes with
-    // very many lights, where the table would not pay.
-    struct SolidAngleCache {
-        std::uint64_t point = ~0ull;
-        Vec3 n;  // the receiver normal the warp was made for
-        std::optional<CosineWarped<SphericalRect>> rect;
-        std::optional<CosineWarped<SphericalTriangle>> triangle;
-        std::optional<SphericalEllipse> ellipse;
-    };
-    static constexpr std::size_t kMaxCachedLights = 1024;
-    const SolidAngleCache* solid_angle(std::uint32_t l, const Vec3& x, const Vec3& n);
-    bool solid_angle_ready(std::uint32_t l) const {
-        return l < solid_angle_cache_.size() && solid_angle_cache_[l].point == point_serial_;
-    }
-    std::optional<LightSample> sample(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
-                                      const Vec3& n, double u1, double u2);
-    // Whether light l (`light`) is tiny in solid angle at x (kTinySolidAngle).
-    bool tiny(std::uint32_t l, const Light& light, const Vec3& x) const {
-        if (p_.tiny_shapes.empty()) return tiny_in_solid_angle(tiny_shape_of(light), x);
-        return tiny_in_solid_angle(p_.tiny_shapes[l], x);
-    }
-    static std::optional<LightSample> sample_cached(const SolidAngleCache& c, double u1,
-                                                    double u2);
-    // A triangle light's hit test along a direction, once made (or not).
-    struct TriangleTest {
-        bool known = false;
-        std::optional<ShapeHit> hit;
-    };
-    // known: light l's hit test along w, where made (Along::tests).
-    double pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x, const Vec3& n,
-               const Vec3& w, const TriangleTest* known = nullptr);
-    std::vector<SolidAngleCache> solid_angle_cache_;
-    std::uint64_t point_serial_ = 0;
 
     const LightingContext& p_;
     LightingCounters& counters;
     LightTables tables_;  // the point's, per light technique
+    ShapeDraws shapes_;    // light shape draws and densities at the position
+    LightsAlong lights_along_;  // the lights along the last direction asked about
     std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
     struct Hit {
         std::uint32_t light;
         Emitted emitted;
     };
     std::vector<Hit> hits_;
-    struct Along {
-        Vec3 x, w;
-        bool valid = false;
-        std::vector<std::uint32_t> lights;
-        // Per light of `lights`, its triangle's hit test along w where
-        // integrand_to_blocker made it (valid while along_serial_ = tested):
-        // the shape's area density takes it instead of a second test (~140
-        // instructions a sample among emissive triangles).
-        std::vector<TriangleTest> tests;
-        std::uint64_t tested = 0;
-    } along_;
-    struct ShapePdfs {
-        std::uint64_t along = 0;  // along_serial_ they were evaluated for
-        ShapeSampler sampler = ShapeSampler::Area;
-        Vec3 n;
-        std::vector<double> pdf;  // per light in along_.lights
-    } shape_pdfs_;
-    std::uint64_t along_serial_ = 0;  // counts along_'s recomputations
-    // Whether along_ lists the lights along (x, w) already.
-    bool along_is(const Vec3& x, const Vec3& w) const {
-        const Along& a = along_;
-        return a.valid && a.x.x == x.x && a.x.y == x.y && a.x.z == x.z && a.w.x == w.x &&
-               a.w.y == w.y && a.w.z == w.z;
-    }
     // A table technique's density along a direction whose lights are not
     // listed yet: up to this many lights, a loop over the table's (a shape
     // test each, ~200 instructions) costs less than listing them (an Embree
     // query of the emitter shapes).
     static constexpr std::size_t kFewTableLights = 4;
     // technique_pdf's table slots along w, each with its light's index in
-    // along_.lights (for its hit test, Along::tests).
+    // the lights along w (for its hit test, LightsAlong::tests_of).
     std::vector<std::pair<std::size_t, std::size_t>> along_slots_;
-    // The last light sample: its light surely lies along its direction, and
-    // its shape density there is the one the draw returned — pdf() reuses it
-    // instead of inverting the draw (~10 % of a solid-angle sample) where the
-    // weights are continuous in the densities (reuse_drawn_pdf_), so that a
-    // last-digit difference from the evaluated density changes nothing. The
-    // maximum and cutoff heuristics compare densities (exact ties where two
-    // techniques share a density), so there every density stays one function
-    // of the direction, whichever technique drew it.
-    struct Drawn {
-        std::uint32_t light = ~0u;
-        Vec3 w;
-        // The technique's (a tiny light's draw used Area: pdf() repeats the
-        // choice from the light and the point).
-        ShapeSampler sampler = ShapeSampler::Area;
-        double pdf = 0;
-        std::uint64_t point = ~0ull;  // point_serial_ of the draw
-    } drawn_;
     // Whether a point with one light technique estimates each drawn light's
     // own part (take_sample). Not among emissive triangles: the triangles of
     // a closed mesh overlap along most directions (a sphere's far side behind
@@ -604,17 +522,6 @@ struct PointLighting::Impl {
     // bake, best of 5 interleaved runs of 10): samples=2 42 → 34 ms;
     // samples=64 unchanged within the noise (±10 %).
     const bool cheap_tables_ = !p_.keeps_texel_tables;
-    const bool reuse_drawn_pdf_ = p_.settings.strategy != Strategy::Maximum &&
-                                  p_.settings.strategy != Strategy::Cutoff;
-    // `sampler`: the technique's, before the tiny-light substitution (the
-    // draw made it for the same light and point).
-    bool drawn_density(std::uint32_t l, ShapeSampler sampler, const Vec3& w, double& pdf) const {
-        if (!reuse_drawn_pdf_ || drawn_.light != l || drawn_.point != point_serial_ || drawn_.sampler != sampler ||
-            drawn_.w.x != w.x || drawn_.w.y != w.y || drawn_.w.z != w.z)
-            return false;
-        pdf = drawn_.pdf;
-        return true;
-    }
     LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
     // The light the sample being taken drew from `selector` at its position,
     // and the pmf the draw formed: its density takes that pmf, which the

@@ -33,7 +33,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
             drawn_at = footprint->at(fu, fv);
             at = &drawn_at;
         }
-        ++point_serial_;  // the solid-angle cache holds one position's shapes
+        shapes_.new_position();  // the solid-angle cache holds one position's shapes
     }
     const SurfacePoint& p = *at;
     const int hidden_index =
@@ -69,7 +69,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
             u2 = selected->u2;
             if (light) drawn_selection_ = {selected->selector, light->light, light->pmf};
         }
-        const auto s = light ? sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
+        const auto s = light ? shapes_.sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
         ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
         if (ok) w = s->dir;
         if (ok) own_density = light->pmf * s->pdf, drawn_distance = s->dist;

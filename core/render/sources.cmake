@@ -12,6 +12,8 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/integrand.cpp
     ${CMAKE_CURRENT_LIST_DIR}/light_tables.cpp
     ${CMAKE_CURRENT_LIST_DIR}/light_densities.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/shape_draws.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/lights_along.cpp
     ${CMAKE_CURRENT_LIST_DIR}/point_estimate.cpp
     ${CMAKE_CURRENT_LIST_DIR}/receiver.cpp
     ${CMAKE_CURRENT_LIST_DIR}/light_selection.cpp
