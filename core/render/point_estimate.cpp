@@ -122,7 +122,7 @@ void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_f
 void PointLighting::Impl::set_hidden_part(Active& active) const {
     active.hidden.clear();
     active.hidden_mask = 0;
-    if (!p_.plan.bsdf_invisible_lights && world_through_ == ~0u) return;
+    if (!p_.plan.bsdf_invisible_lights && integrand_.world_through() == ~0u) return;
     for (int k : active.all)
         if (in_hidden_part(k)) {
             active.hidden.push_back(k);

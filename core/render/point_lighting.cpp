@@ -108,7 +108,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
                 seq.get_2d(round_in_stream, 0, fu, fv);
                 at = footprint->at(fu, fv);
             }
-            const Vec3 d = delta_lighting(at, seq.get_1d(round_in_stream, 1));
+            const Vec3 d = integrand_.delta_lighting(at, seq.get_1d(round_in_stream, 1));
             delta.sum[s] += d;
             delta.sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
         }
@@ -138,7 +138,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     }
     rounds_timer.stop();
     light_streams.keep();
-    if (!delta.per_round && !p_.delta.empty()) delta.at_centre = delta_lighting(centre, 0.0);
+    if (!delta.per_round && !p_.delta.empty()) delta.at_centre = integrand_.delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;
     if (streams) *streams = StreamEstimates{};

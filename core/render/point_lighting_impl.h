@@ -5,6 +5,7 @@
 #pragma once
 
 #include "render/direct_lighting.h"
+#include "render/integrand.h"
 #include "render/light_tables.h"
 #include "render/lights_along.h"
 #include "render/shape_draws.h"
@@ -31,9 +32,6 @@
 
 namespace omis {
 
-// An emissive triangle is geometry too: a closest hit within this relative
-// depth of it is the emitter itself or a coplanar neighbour, not a blocker.
-constexpr double kEmitterDepthTolerance = 1e-4;
 
 // A triangle or rect smaller than this in solid angle (sr, estimated as area
 // over the squared distance to its centroid) is sampled by area for
@@ -121,7 +119,7 @@ constexpr std::size_t kMaxTinyShapeTable = 4096;
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
         : p_(context), counters(counters), tables_(context), shapes_(context),
-          lights_along_(context, shapes_, counters) {
+          lights_along_(context, shapes_, counters), integrand_(context, lights_along_, counters) {
         // Where each table technique's counts lie among a point's kept ones
         // (LightingContext::keep_draw_counts' layout).
         // Likewise their probes' reach (LightingContext::keep_table_reach's).
@@ -183,16 +181,15 @@ struct PointLighting::Impl {
     void active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
                     const Footprint* footprint, Active& active);
     void restore(const TexelTables::Entry& kept, Active& active);
-    Vec3 delta_lighting(const SurfacePoint& p, double u);
     struct Estimators {
         MisEstimator* main;
         // A part of the integrand only some techniques estimate (null if none):
         // lights invisible to BSDF rays (the light techniques'), or the world
-        // seen through emitters (world_through_, `bsdf`'s).
+        // seen through emitters (Integrand::world_through, `bsdf`'s).
         MisEstimator* hidden;
     };
     bool in_hidden_part(int k) const {
-        return p_.settings.techniques[k].bsdf == (world_through_ != ~0u);
+        return p_.settings.techniques[k].bsdf == (integrand_.world_through() != ~0u);
     }
     void set_hidden_part(Active& active) const;
     // A world seen through emitters where light techniques reach the point:
@@ -204,7 +201,7 @@ struct PointLighting::Impl {
     // one closest hit, no densities, no emitter query. Each part keeps a
     // technique that covers it: unbiased.
     bool split_parts(const Active& active) const {
-        return world_through_ != ~0u && !pilot_ && !active.lights.empty() && !active.hidden.empty();
+        return integrand_.world_through() != ~0u && !pilot_ && !active.lights.empty() && !active.hidden.empty();
     }
     const std::vector<int>& main_techniques(const Active& active) const {
         return split_parts(active) ? active.lights : active.all;
@@ -356,80 +353,14 @@ struct PointLighting::Impl {
     static bool balance_is_better(const Vec3* optimal, const Vec3* balance,
                                   const int* stream_rounds);
 
-    struct Integrand {
-        // Lights BSDF rays see, and those they do not (or, world_through_: the
-        // emitters' part and the world's, seen through emitters).
-        Vec3 main, hidden;
-    };
-    // world_through_: moves the world's part of f (a direction whose first
-    // hit, `blocker`, if any, emits) from main to hidden, where main holds it
-    // already (nothing hit) or holds the emitter's L_e (L_e − L_w). Without
-    // such a world the blocker's mesh is not looked up (~30 instructions a
-    // sample among emissive triangles).
-    void split_world(Integrand& f, const Vec3& x, const Vec3& w,
-                     const std::optional<RayHit>& blocker) const {
-        if (world_through_ == ~0u) return;
-        if (blocker && !p_.scene.geometry().mesh(blocker->mesh).is_emissive()) return;
-        const auto e = emitted_radiance(p_.scene.lights()[world_through_], x, w);
-        if (!e) return;
-        f.main -= e->radiance;
-        f.hidden += e->radiance;
-    }
-    Integrand integrand(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
-    // take_sample's shortcut for a light sample of integrand 0 (see there);
-    // false: the sample still needs its densities.
-    bool add_unlit_sample(std::size_t main_size, int main_index, int hidden_index,
-                          double own_density, const Integrand& f, const Estimators* into,
-                          int n_into);
-    // integrand() where every light casts shadows (clip_at_blocker_, below
-    // p_), from the closest hit first: of a direction a light technique drew
-    // toward light `drawn` (at drawn_distance from x), or with drawn = ~0u of
-    // a BSDF direction. Where the blocker hides the drawn light (or, for a
-    // BSDF direction, where there is one), only the lights up to it are
-    // listed, which are all that can be seen; where nothing is hit and every
-    // shaped light is an emissive triangle of the geometry
-    // (shapes_in_geometry_), only the unshaped lights (and the drawn one).
-    // The same value as integrand(), but on the edges of light shapes
-    // (a set of directions of measure zero).
-    Integrand integrand_to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
-                                   std::uint32_t drawn, double drawn_distance);
-    // The radiance of the mesh lights among `lights` whose mesh is the
-    // closest hit along w (`blocker`), added to f (before the closure).
-    void add_mesh_lights_seen(Integrand& f, const std::vector<std::uint32_t>& lights,
-                              const std::optional<RayHit>& blocker) const {
-        if (!blocker || !p_.scene.geometry().mesh(blocker->mesh).is_emissive()) return;
-        for (std::uint32_t l : lights) {
-            const Light& light = p_.scene.lights()[l];
-            if (light.type == LightType::Mesh && light.mesh == blocker->mesh)
-                (light.visible_to_bsdf ? f.main : f.hidden) += light.emission;
-        }
-    }
-    // Light l's own part of the integrand along w (visible from x or not).
-    Integrand light_integrand(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng,
-                              const Vec3& w);
-    // light_integrand before its shadow ray: light l's radiance toward x
-    // along w, the receiver's cosine factor and the emitting point's
-    // distance; none where w is below x's horizon or l sends nothing along it.
-    struct Unoccluded {
-        Vec3 radiance;
-        double cosine_factor, distance;
-    };
-    std::optional<Unoccluded> light_unoccluded(std::uint32_t l, const Vec3& x, const Vec3& n,
-                                               const Vec3& w) const;
-    // Whether a shadow ray from x along w meets something before light l's
-    // emitting point `distance` away (false where no shadow rays are traced);
-    // for a mesh light, whether the closest hit is off its mesh.
-    bool light_occluded(std::uint32_t l, const Vec3& x, const Vec3& ng, const Vec3& w,
-                        double distance);
     // Starts reading the first two cache lines of light l's record, all that
     // an emissive triangle's sample reads (light.h).
     void prefetch_light(std::uint32_t l) const { prefetch_record(&p_.scene.lights()[l]); }
-    // GeometryScene::ListedLight: light l's record and its tree pmf's.
-    static void prefetch_listed(void* self, std::uint32_t l) {
-        const Impl& impl = *static_cast<const Impl*>(self);
-        impl.prefetch_light(l);
-        if (impl.p_.tree_selector) impl.p_.tree_selector->prefetch(l);
-    }
+    // take_sample's shortcut for a light sample of integrand 0 (see there);
+    // false: the sample still needs its densities.
+    bool add_unlit_sample(std::size_t main_size, int main_index, int hidden_index,
+                          double own_density, const Integrand::Value& f, const Estimators* into,
+                          int n_into);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
     MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                             std::uint64_t key, const std::vector<int>& active,
@@ -441,12 +372,8 @@ struct PointLighting::Impl {
     LightTables tables_;  // the point's, per light technique
     ShapeDraws shapes_;    // light shape draws and densities at the position
     LightsAlong lights_along_;  // the lights along the last direction asked about
+    Integrand integrand_;       // the integrand along a direction, delta lights
     std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
-    struct Hit {
-        std::uint32_t light;
-        Emitted emitted;
-    };
-    std::vector<Hit> hits_;
     // A table technique's density along a direction whose lights are not
     // listed yet: up to this many lights, a loop over the table's (a shape
     // test each, ~200 instructions) costs less than listing them (an Embree
@@ -479,40 +406,6 @@ struct PointLighting::Impl {
         for (const Technique& t : p_.settings.techniques) s.push_back(p_.selector(t.selection));
         return s;
     }();
-    // integrand_to_blocker applies (set after p_). Among emissive triangles:
-    // with analytic lights alone, integrand() often needs only an occlusion
-    // ray, cheaper than a closest hit.
-    const bool clip_at_blocker_ =
-        p_.settings.fast_paths && p_.plan.shadow_rays &&
-        std::all_of(p_.scene.lights().begin(), p_.scene.lights().end(),
-                    [](const Light& l) { return l.cast_shadow; }) &&
-        std::any_of(p_.scene.lights().begin(), p_.scene.lights().end(),
-                    [](const Light& l) { return l.type == LightType::Triangle; });
-    // The scene's (first) world light, else ~0u.
-    const std::uint32_t world_light_ = [this] {
-        for (std::uint32_t l = 0; l < p_.scene.lights().size(); ++l)
-            if (p_.scene.lights()[l].type == LightType::World) return l;
-        return ~0u;
-    }();
-    // BSDF directions too take integrand_to_blocker where a world lies along
-    // every one of them: integrand() then traces a ray for each anyway, after
-    // an all-hits query of the emitter shapes that the closest hit makes
-    // unneeded where it meets a surface that does not emit or, with
-    // shapes_in_geometry_, nothing.
-    const bool bsdf_to_blocker_ = clip_at_blocker_ && world_light_ != ~0u;
-    // The world light when the plan sees it through emitters, else ~0u.
-    const std::uint32_t world_through_ = p_.plan.world_through_emitters ? world_light_ : ~0u;
-    // Every light with an emitter shape is an emissive triangle, which the
-    // geometry holds: a ray that meets no surface crosses no such shape.
-    const bool shapes_in_geometry_ = std::all_of(
-        p_.scene.lights().begin(), p_.scene.lights().end(), [&](const Light& l) {
-            return l.is_delta() || l.type == LightType::Triangle ||
-                   std::find(p_.scene.unshaped_lights().begin(), p_.scene.unshaped_lights().end(),
-                             std::uint32_t(&l - p_.scene.lights().data())) !=
-                       p_.scene.unshaped_lights().end();
-        });
-    std::vector<std::uint32_t> clipped_;  // integrand_to_blocker's lights
-    std::vector<std::uint32_t> merged_;   // ... from the closest hit's traversal
     // Every light technique's table (if any) has weights that need no
     // irradiance (`uniform`, `power`: only which lights reach the probes):
     // active_for makes them again at every pass instead of keeping them in
@@ -522,7 +415,7 @@ struct PointLighting::Impl {
     // bake, best of 5 interleaved runs of 10): samples=2 42 → 34 ms;
     // samples=64 unchanged within the noise (±10 %).
     const bool cheap_tables_ = !p_.keeps_texel_tables;
-    LightSelector::Memo memo_, delta_memo_;  // the trees' branching at the current point
+    LightSelector::Memo memo_;  // the trees' branching at the current point
     // The light the sample being taken drew from `selector` at its position,
     // and the pmf the draw formed: its density takes that pmf, which the
     // memo does not hold for a light drawn ahead (SelectorDraw). The same

@@ -77,7 +77,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
             const double pdf = light->pmf * s->pdf;
             ok = pdf > 0 && std::isfinite(pdf);
             if (ok) {
-                const Integrand f = light_integrand(light->light, p.x, p.n, p.ng, w);
+                const Integrand::Value f = integrand_.of_light(light->light, p.x, p.n, p.ng, w);
                 const double main_f[3] = {f.main.x, f.main.y, f.main.z};
                 const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
                 for (int e = 0; e < n_into; ++e) {
@@ -102,14 +102,14 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
               : int(a);
     const std::size_t main_size = main_techniques(active).size();
     double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques], main_pdfs[kMaxMisTechniques];
-    std::optional<Integrand> light_f;
-    if (ok && light && clip_at_blocker_) {
-        light_f = integrand_to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
+    std::optional<Integrand::Value> light_f;
+    if (ok && light && integrand_.clips_at_blocker()) {
+        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
         if (add_unlit_sample(main_size, main_index, hidden_index, own_density, *light_f, into,
                              n_into))
             return;
-    } else if (ok && t.bsdf && bsdf_to_blocker_) {
-        light_f = integrand_to_blocker(p.x, p.n, p.ng, w, ~0u, 0);
+    } else if (ok && t.bsdf && integrand_.bsdf_to_blocker()) {
+        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, ~0u, 0);
     }
     if (ok) {
         for (std::size_t b = 0; b < active.all.size(); ++b) {
@@ -129,7 +129,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         return;
     }
     const std::uint64_t rays_before = counters.rays;
-    const Integrand f = light_f ? *light_f : integrand(p.x, p.n, p.ng, w);
+    const Integrand::Value f = light_f ? *light_f : integrand_.at(p.x, p.n, p.ng, w);
     if (pilot_) record_sample(active, a, pdfs, f.main + f.hidden, rays_before);
     const double main_f[3] = {f.main.x, f.main.y, f.main.z};
     const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
@@ -166,8 +166,8 @@ void PointLighting::Impl::take_world_sample(const Active& active, const SurfaceP
     ++counters.rays;
     const std::optional<RayHit> blocker = geometry.closest_hit(
         offset_ray_origin(p.x, p.ng, w), w, 0, std::numeric_limits<double>::infinity());
-    Integrand f;
-    split_world(f, p.x, w, blocker);
+    Integrand::Value f;
+    integrand_.split_world(f, p.x, w, blocker);
     const Vec3 world = f.hidden * receiver_cosine_factor(p_.settings.receiver, cos_theta);
     const double world_f[3] = {world.x, world.y, world.z};
     double pdfs[kMaxMisTechniques];
@@ -261,7 +261,7 @@ void PointLighting::Impl::take_occluder_sample(const Active& active, const Surfa
                          weight[f];
         }
     }
-    const auto e = emitted_radiance(p_.scene.lights()[world_through_], p.x, p.n);
+    const auto e = emitted_radiance(p_.scene.lights()[integrand_.world_through()], p.x, p.n);
     const Vec3 world =
         e ? e->radiance * (p_.settings.receiver.hemisphere_integral() - hidden) : Vec3();
     const double world_f[3] = {world.x, world.y, world.z};
@@ -278,7 +278,7 @@ void PointLighting::Impl::take_occluder_sample(const Active& active, const Surfa
 // others' left at 0 — no emitter query, no tree walks.
 bool PointLighting::Impl::add_unlit_sample(std::size_t main_size, int main_index,
                                            int hidden_index, double own_density,
-                                           const Integrand& f, const Estimators* into,
+                                           const Integrand::Value& f, const Estimators* into,
                                            int n_into) {
     const bool zero = f.main.x == 0 && f.main.y == 0 && f.main.z == 0 && f.hidden.x == 0 &&
                       f.hidden.y == 0 && f.hidden.z == 0;

@@ -87,7 +87,7 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
         const auto s =
             sample_light(p_.scene.lights()[l], ShapeSampler::Area, p.x, p.n, 0.5, 0.5);
         if (!s || !(s->pdf > 0)) continue;
-        const auto u = light_unoccluded(l, p.x, p.n, s->dir);
+        const auto u = integrand_.unoccluded(l, p.x, p.n, s->dir);
         if (!u) continue;
         const double weight = luminance(u->radiance) * u->cosine_factor / s->pdf;
         if (!(weight > 0)) continue;
@@ -99,7 +99,7 @@ bool PointLighting::Impl::centre_in_shadow(const SurfacePoint& p) {
               [](const MiddlePoint& a, const MiddlePoint& b) { return a.weight > b.weight; });
     double seen = 0, hidden = 0;
     for (const MiddlePoint& m : middles) {
-        (light_occluded(m.light, p.x, p.ng, m.dir, m.distance) ? hidden : seen) += m.weight;
+        (integrand_.occluded(m.light, p.x, p.ng, m.dir, m.distance) ? hidden : seen) += m.weight;
         if (hidden >= kShadowedShare * total) return true;
         if (seen > (1 - kShadowedShare) * total) return false;
     }
