@@ -4,7 +4,114 @@
 
 namespace omis {
 
-void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int rounds,
+// shade's rounds: every technique's samples of one round after another, in
+// the order of the point's techniques. Techniques whose lights come from a
+// selector draw each sample's light into selector_draws_[now], and among
+// many lights begin it two samples ahead and finish it one ahead, in the
+// slots after it (SelectorDraw).
+struct PointLighting::Impl::RoundLoop {
+    Impl& impl;
+    const Active& active;
+    LightStreams& light_streams;
+    const int* counts;
+    int first_round, rounds, K;
+    const SurfacePoint& centre;
+    const Footprint* footprint;
+    int now = 0;
+
+    // Technique k's draw j of round r: its index in its stream's sequence.
+    std::uint32_t index_of(int k, int r, int j) const {
+        const int s = r % K;
+        return impl.draw_start(k, s) +
+               (std::uint32_t(r / K) - std::uint32_t(rounds_in_stream(s, first_round, K))) *
+                   std::uint32_t(counts[k]) +
+               std::uint32_t(j);
+    }
+    bool draws_ahead(int k) const {
+        return !impl.p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
+    }
+    // Moves (r, a, j) to the sample after it in the loop's order; false past
+    // the call's last.
+    bool advance(int& r, std::size_t& a, int& j) const {
+        ++j;
+        while (j >= counts[active.all[a]]) {
+            j = 0;
+            if (++a == active.all.size()) {
+                a = 0;
+                if (++r == first_round + rounds) return false;
+            }
+        }
+        return true;
+    }
+    // Finishes the light of the sample after (r, a, j) and begins the one
+    // after that.
+    void draw_after(int r, std::size_t a, int j) {
+        if (!advance(r, a, j)) return;
+        int k = active.all[a];
+        if (draws_ahead(k)) {
+            SelectorDraw& next = impl.selector_draws_[(now + 1) % kSelectorDraws];
+            const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), r % K);
+            const std::uint32_t index = index_of(k, r, j);
+            if (next.is(k, seq, index)) impl.finish_selector_draw(next);
+            else impl.draw_selector(k, seq, index, centre, footprint, next);
+            if (next.light) impl.prefetch_light(next.light->light);
+        }
+        if (!advance(r, a, j)) return;
+        k = active.all[a];
+        if (!draws_ahead(k)) return;
+        impl.begin_selector_draw(k, impl.technique_sequence(std::size_t(k), r % K),
+                                 index_of(k, r, j), centre, footprint,
+                                 impl.selector_draws_[(now + 2) % kSelectorDraws]);
+    }
+    // Round r's samples into `into` (n_into estimator pairs).
+    void round(int r, const Estimators* into, int n_into) {
+        const int s = r % K;
+        for (std::size_t a = 0; a < active.all.size(); ++a) {
+            const int k = active.all[a];
+            const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), s);
+            const bool table = light_streams.uses_table(k);
+            const bool from_selector = draws_ahead(k);
+            for (int j = 0; j < counts[k]; ++j) {
+                const std::uint32_t index = index_of(k, r, j);
+                SelectorDraw* selected = nullptr;
+                if (from_selector) {
+                    selected = &impl.selector_draws_[now];
+                    if (!selected->is(k, seq, index))
+                        impl.draw_selector(k, seq, index, centre, footprint, *selected);
+                    impl.finish_selector_draw(*selected);  // (done a sample ahead)
+                }
+                if (impl.draw_next_ahead_) draw_after(r, a, j);
+                impl.take_sample(active, a, seq, index, centre, footprint, into, n_into,
+                                 table ? light_streams.draw(k, s, seq, index) : TableDraw{},
+                                 selected);
+                now = (now + 1) % kSelectorDraws;
+            }
+        }
+    }
+};
+
+// The delta lights of round r at its position (one per round where
+// positions vary or lights are drawn), into `delta`.
+void PointLighting::Impl::add_delta_round(int r, const SurfacePoint& centre,
+                                          const Footprint* footprint, DeltaSums& delta) {
+    const int K = p_.settings.streams;
+    const int s = r % K;
+    const std::uint32_t round_in_stream = std::uint32_t(r / K);
+    const ScrambledSobol& seq = technique_sequence(p_.settings.techniques.size(), s);
+    SurfacePoint at = centre;
+    if (footprint) {
+        double fu, fv;
+        seq.get_2d(round_in_stream, 0, fu, fv);
+        at = footprint->at(fu, fv);
+    }
+    const Vec3 d = integrand_.delta_lighting(at, seq.get_1d(round_in_stream, 1));
+    delta.sum[s] += d;
+    delta.sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
+}
+
+// The point's setup (its techniques, tables and counts), then its rounds,
+// then its estimate.
+void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds,
                                 const SurfacePoint& centre, const Footprint* footprint,
                                 const int* counts_in, double* value, double* variance,
                                 double* own_variance_out, StreamEstimates* streams,
@@ -14,7 +121,7 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     Active& active = active_scratch_;
     active.clear();
     // Bakes shade a texel again at each pass (and a footprint's tables cost).
-    active_for(stream, footprint || first_round > 0, centre, footprint, active);
+    active_for(point, footprint || first_round > 0, centre, footprint, active);
     set_hidden_part(active);
     // A shadowed texel (shadowed_draws) draws m times every count, at every
     // pass: its draw indices are m times those of the counts.
@@ -29,14 +136,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     // scrambled sequence, continued from round to round. Delta lights, when
     // positions vary, take one position per round from a sequence of their own.
     const int K = p_.settings.streams;
-    const std::uint64_t base = mix64(p_.settings.seed ^ mix64(stream));
-    const std::size_t delta_group = p_.settings.techniques.size();
+    const std::uint64_t base = mix64(p_.settings.seed ^ mix64(point));
     sequence_base_ = base;
-    forget_sequences(technique_sequences_, (delta_group + 1) * std::size_t(K));
+    forget_sequences(technique_sequences_, (p_.settings.techniques.size() + 1) * std::size_t(K));
     set_draw_starts(first_round, earlier);
     if (m > 1)
         for (std::uint32_t& start : draw_start_) start *= std::uint32_t(m);
-    LightStreams light_streams(*this, base, stream, active);
+    LightStreams light_streams(*this, base, point, active);
     const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
     set_up_estimators(active, plan, counts, counts_in != nullptr || m > 1, all, per);
@@ -48,93 +154,13 @@ void PointLighting::Impl::shade(std::uint64_t stream, int first_round, int round
     const bool by_stream_only = plan.by_stream && !plan.in_whole;
     ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
                                                                  : nullptr);
-    // Technique k's draw j of round r: its index in its stream's sequence.
-    auto index_of = [&](int k, int r, int j) {
-        const int s = r % K;
-        return draw_start(k, s) +
-               (std::uint32_t(r / K) - std::uint32_t(rounds_in_stream(s, first_round, K))) *
-                   std::uint32_t(counts[k]) +
-               std::uint32_t(j);
-    };
-    // Techniques whose lights come from a selector: each sample's light is
-    // drawn into selector_draws_[now], and among many lights begun two
-    // samples ahead and finished one ahead, in the slots after it
-    // (SelectorDraw).
-    auto draws_ahead = [&](int k) {
-        return !p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
-    };
-    int now = 0;
     for (SelectorDraw& d : selector_draws_) d.k = -1;  // last call's: other sequences
-    // Moves (r, a, j) to the sample after it in the loop's order; false past
-    // the call's last.
-    auto advance = [&](int& r, std::size_t& a, int& j) {
-        ++j;
-        while (j >= counts[active.all[a]]) {
-            j = 0;
-            if (++a == active.all.size()) {
-                a = 0;
-                if (++r == first_round + rounds) return false;
-            }
-        }
-        return true;
-    };
-    // Finishes the light of the sample after (r, a, j) and begins the one
-    // after that.
-    auto draw_after = [&](int r, std::size_t a, int j) {
-        if (!advance(r, a, j)) return;
-        int k = active.all[a];
-        if (draws_ahead(k)) {
-            SelectorDraw& next = selector_draws_[(now + 1) % kSelectorDraws];
-            const ScrambledSobol& seq = technique_sequence(std::size_t(k), r % K);
-            const std::uint32_t index = index_of(k, r, j);
-            if (next.is(k, seq, index)) finish_selector_draw(next);
-            else draw_selector(k, seq, index, centre, footprint, next);
-            if (next.light) prefetch_light(next.light->light);
-        }
-        if (!advance(r, a, j)) return;
-        k = active.all[a];
-        if (!draws_ahead(k)) return;
-        begin_selector_draw(k, technique_sequence(std::size_t(k), r % K), index_of(k, r, j),
-                            centre, footprint, selector_draws_[(now + 2) % kSelectorDraws]);
-    };
+    RoundLoop loop{*this, active, light_streams, counts, first_round, rounds, K, centre, footprint};
     for (int r = first_round; r < first_round + rounds; ++r) {
-        const int s = r % K;
-        const std::uint32_t round_in_stream = std::uint32_t(r / K);
-        if (delta.per_round) {
-            const ScrambledSobol& seq = technique_sequence(delta_group, s);
-            SurfacePoint at = centre;
-            if (footprint) {
-                double fu, fv;
-                seq.get_2d(round_in_stream, 0, fu, fv);
-                at = footprint->at(fu, fv);
-            }
-            const Vec3 d = integrand_.delta_lighting(at, seq.get_1d(round_in_stream, 1));
-            delta.sum[s] += d;
-            delta.sum2 += Vec3(d.x * d.x, d.y * d.y, d.z * d.z);
-        }
-        const Estimators into[2] = {all, per[s]};
-        if (plan.in_whole && !active.all.empty()) set_stream(all, s);
-        for (std::size_t a = 0; a < active.all.size(); ++a) {
-            const int k = active.all[a];
-            const ScrambledSobol& seq = technique_sequence(std::size_t(k), s);
-            const bool table = light_streams.uses_table(k);
-            const bool from_selector = draws_ahead(k);
-            for (int j = 0; j < counts[k]; ++j) {
-                const std::uint32_t index = index_of(k, r, j);
-                SelectorDraw* selected = nullptr;
-                if (from_selector) {
-                    selected = &selector_draws_[now];
-                    if (!selected->is(k, seq, index))
-                        draw_selector(k, seq, index, centre, footprint, *selected);
-                    finish_selector_draw(*selected);  // (done a sample ahead)
-                }
-                if (draw_next_ahead_) draw_after(r, a, j);
-                take_sample(active, a, seq, index, centre, footprint, into,
-                            by_stream_only ? 2 : 1,
-                            table ? light_streams.draw(k, s, seq, index) : TableDraw{}, selected);
-                now = (now + 1) % kSelectorDraws;
-            }
-        }
+        if (delta.per_round) add_delta_round(r, centre, footprint, delta);
+        const Estimators into[2] = {all, per[r % K]};
+        if (plan.in_whole && !active.all.empty()) set_stream(all, r % K);
+        loop.round(r, into, by_stream_only ? 2 : 1);
     }
     rounds_timer.stop();
     light_streams.keep();

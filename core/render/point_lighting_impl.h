@@ -133,7 +133,7 @@ struct PointLighting::Impl {
         }
     }
 
-    void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
+    void shade(std::uint64_t point, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, const int* counts, double* value, double* variance,
                double* own_variance, StreamEstimates* streams,
                const std::vector<DrawnRounds>* earlier);
@@ -325,6 +325,9 @@ struct PointLighting::Impl {
         bool per_round = false;  // a position per round (else at_centre)
         Vec3 sum[kMaxSampleStreams], sum2, at_centre;
     };
+    struct RoundLoop;
+    void add_delta_round(int r, const SurfacePoint& centre, const Footprint* footprint,
+                         DeltaSums& delta);
     Vec3 point_estimate(const Active& active, const RoundPlan& plan, const Estimators& all,
                         const Estimators* per, const DeltaSums& delta, Vec3& own_variance,
                         Vec3& error_variance, StreamEstimates* streams);
