@@ -258,6 +258,15 @@ struct PointLighting::Impl {
     SelectorDraw selector_draws_[kSelectorDraws];
     // `drawn` for a technique that draws from a per-point table, `selected`
     // for one that draws from a selector (null for `bsdf`).
+    struct SampleDraw;
+    SampleDraw draw_direction(const Technique& t, int k, const SurfacePoint& p,
+                              const ScrambledSobol& sequence, std::uint32_t index,
+                              const TableDraw& drawn, const SelectorDraw* selected);
+    bool add_own_light_sample(const SampleDraw& d, const SurfacePoint& p, int hidden_index,
+                              const Estimators* into, int n_into);
+    void evaluate_and_add(const Active& active, std::size_t a, const SurfacePoint& p,
+                          const SampleDraw& d, int hidden_index, const Estimators* into,
+                          int n_into);
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
                      const Estimators* into, int n_into, const TableDraw& drawn,

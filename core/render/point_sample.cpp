@@ -4,6 +4,68 @@
 
 namespace omis {
 
+// A sample's direction, drawn by its technique at its position p.
+struct PointLighting::Impl::SampleDraw {
+    Vec3 w;
+    bool ok = false;
+    double u1 = 0, u2 = 0;  // the shape's (or BSDF's) pair
+    // A light sample's light, its light's share of the technique's density,
+    // the shape's density and the distance to the point drawn on it.
+    std::optional<SelectedLight> light;
+    double own_density = 0, shape_pdf = 0, drawn_distance = 0;
+};
+
+PointLighting::Impl::SampleDraw PointLighting::Impl::draw_direction(
+    const Technique& t, int k, const SurfacePoint& p, const ScrambledSobol& sequence,
+    std::uint32_t index, const TableDraw& drawn, const SelectorDraw* selected) {
+    SampleDraw d;
+    d.u1 = drawn.u1, d.u2 = drawn.u2;  // a table draw brings its light's own
+    if (t.bsdf) sequence.get_2d(index, 2, d.u1, d.u2);
+    drawn_selection_ = {};  // none but this sample's own
+    if (t.bsdf) {
+        d.w = Frame(p.n).to_world(sample_cosine_hemisphere(d.u1, d.u2));
+        d.ok = dot(d.w, p.n) > 0;
+        return d;
+    }
+    if (drawn.slot >= 0) {
+        const LightTable& c = tables_[k];
+        d.light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
+    } else {
+        d.light = selected->light;
+        d.u1 = selected->u1;
+        d.u2 = selected->u2;
+        if (d.light) drawn_selection_ = {selected->selector, d.light->light, d.light->pmf};
+    }
+    const auto s =
+        d.light ? shapes_.sample(d.light->light, t.sampler, p.x, p.n, d.u1, d.u2) : std::nullopt;
+    d.ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
+    if (d.ok) d.w = s->dir;
+    if (d.ok) d.own_density = d.light->pmf * s->pdf, d.drawn_distance = s->dist;
+    if (d.ok) d.shape_pdf = s->pdf;
+    return d;
+}
+
+// The point's only technique draws lights: no weights to form, so a
+// sample may estimate its own light's part, f_l / (P(l) p_l(ω)), which
+// sums over lights to the whole integral. It needs neither the other
+// lights along ω (their densities and radiance: an all-hits query, a tree
+// walk each) nor a closest hit, only an occlusion ray up to the light.
+// false: its density is 0 or not finite (nothing added).
+bool PointLighting::Impl::add_own_light_sample(const SampleDraw& d, const SurfacePoint& p,
+                                               int hidden_index, const Estimators* into,
+                                               int n_into) {
+    const double pdf = d.light->pmf * d.shape_pdf;
+    if (!(pdf > 0 && std::isfinite(pdf))) return false;
+    const Integrand::Value f = integrand_.of_light(d.light->light, p.x, p.n, p.ng, d.w);
+    const double main_f[3] = {f.main.x, f.main.y, f.main.z};
+    const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
+    for (int e = 0; e < n_into; ++e) {
+        into[e].main->add_sample(0, &pdf, main_f);
+        if (hidden_index >= 0) into[e].hidden->add_sample(0, &pdf, hidden_f);
+    }
+    return true;
+}
+
 void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const ScrambledSobol& sequence, std::uint32_t index,
                                       const SurfacePoint& centre, const Footprint* footprint,
@@ -40,62 +102,35 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         into[0].hidden && in_hidden_part(k)
             ? int(std::find(active.hidden.begin(), active.hidden.end(), k) - active.hidden.begin())
             : -1;
-    double u1 = drawn.u1, u2 = drawn.u2;  // a table draw brings its light's own
-    if (t.bsdf) sequence.get_2d(index, 2, u1, u2);
-    Vec3 w;
-    bool ok;
-    // The point's only technique draws lights: no weights to form, so a
-    // sample may estimate its own light's part, f_l / (P(l) p_l(ω)), which
-    // sums over lights to the whole integral. It needs neither the other
-    // lights along ω (their densities and radiance: an all-hits query, a tree
-    // walk each) nor a closest hit, only an occlusion ray up to the light.
-    std::optional<SelectedLight> light;
-    // A light sample's: its light's share of the technique's density, and
-    // the distance to the point drawn on it.
-    double own_density = 0, drawn_distance = 0;
+    SampleDraw d = draw_direction(t, k, p, sequence, index, drawn, selected);
     const bool own_light_only =
         own_light_estimates_ && active.all.size() == 1 && !t.bsdf && !pilot_;
-    drawn_selection_ = {};  // none but this sample's own
-    if (t.bsdf) {
-        w = Frame(p.n).to_world(sample_cosine_hemisphere(u1, u2));
-        ok = dot(w, p.n) > 0;
-    } else {
-        if (drawn.slot >= 0) {
-            const LightTable& c = tables_[k];
-            light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
-        } else {
-            light = selected->light;
-            u1 = selected->u1;
-            u2 = selected->u2;
-            if (light) drawn_selection_ = {selected->selector, light->light, light->pmf};
-        }
-        const auto s = light ? shapes_.sample(light->light, t.sampler, p.x, p.n, u1, u2) : std::nullopt;
-        ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
-        if (ok) w = s->dir;
-        if (ok) own_density = light->pmf * s->pdf, drawn_distance = s->dist;
-        if (ok && own_light_only) {
-            const double pdf = light->pmf * s->pdf;
-            ok = pdf > 0 && std::isfinite(pdf);
-            if (ok) {
-                const Integrand::Value f = integrand_.of_light(light->light, p.x, p.n, p.ng, w);
-                const double main_f[3] = {f.main.x, f.main.y, f.main.z};
-                const double hidden_f[3] = {f.hidden.x, f.hidden.y, f.hidden.z};
-                for (int e = 0; e < n_into; ++e) {
-                    into[e].main->add_sample(0, &pdf, main_f);
-                    if (hidden_index >= 0) into[e].hidden->add_sample(0, &pdf, hidden_f);
-                }
-                return;
-            }
-        }
+    if (d.ok && own_light_only) {
+        if (add_own_light_sample(d, p, hidden_index, into, n_into)) return;
+        d.ok = false;  // a density of 0 or past the range: a null sample
     }
     // Every technique's density at the sample's own position: the position
     // density is the same for all of them, so the MIS weights are those of
     // p_k(ω | x).
     const bool split = split_parts(active);
     if (split && t.bsdf && !p_.plan.world_occluders.empty())
-        return take_occluder_sample(active, p, sequence.get_1d(index, 1), u1, u2, w, ok,
+        return take_occluder_sample(active, p, sequence.get_1d(index, 1), d.u1, d.u2, d.w, d.ok,
                                     hidden_index, into, n_into);
-    if (split && t.bsdf) return take_world_sample(active, p, w, ok, hidden_index, into, n_into);
+    if (split && t.bsdf) return take_world_sample(active, p, d.w, d.ok, hidden_index, into, n_into);
+    evaluate_and_add(active, a, p, d, hidden_index, into, n_into);
+}
+
+// A drawn direction's integrand and every technique's density there, into
+// the estimators.
+void PointLighting::Impl::evaluate_and_add(const Active& active, std::size_t a,
+                                           const SurfacePoint& p, const SampleDraw& d,
+                                           int hidden_index, const Estimators* into,
+                                           int n_into) {
+    const int k = active.all[a];
+    const Technique& t = p_.settings.techniques[k];
+    const Vec3& w = d.w;
+    bool ok = d.ok;
+    const bool split = split_parts(active);
     // The sample's technique in the main estimator (split: the light techniques').
     const int main_index =
         split ? int(std::find(active.lights.begin(), active.lights.end(), k) - active.lights.begin())
@@ -103,9 +138,9 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     const std::size_t main_size = main_techniques(active).size();
     double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques], main_pdfs[kMaxMisTechniques];
     std::optional<Integrand::Value> light_f;
-    if (ok && light && integrand_.clips_at_blocker()) {
-        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, light->light, drawn_distance);
-        if (add_unlit_sample(main_size, main_index, hidden_index, own_density, *light_f, into,
+    if (ok && d.light && integrand_.clips_at_blocker()) {
+        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, d.light->light, d.drawn_distance);
+        if (add_unlit_sample(main_size, main_index, hidden_index, d.own_density, *light_f, into,
                              n_into))
             return;
     } else if (ok && t.bsdf && integrand_.bsdf_to_blocker()) {
