@@ -312,27 +312,43 @@ std::string EffectPlan::to_string() const {
     return s.str();
 }
 
-void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
-                        std::vector<int>& samples, int* shadowed_draws) {
-    techniques.clear();
-    samples.clear();
-    if (shadowed_draws) *shadowed_draws = 1;
-    int integrated = 0;
+namespace {
+
+// What default_techniques reads from the scene's integrated lights.
+struct IntegratedLights {
+    int count = 0;
     bool world = false, huge = false;
+};
+
+IntegratedLights integrated_lights(const Scene& scene) {
+    IntegratedLights s;
     for (const Light& l : scene.lights()) {
         if (l.is_delta()) continue;
-        ++integrated;
-        world = world || l.type == LightType::World;
+        ++s.count;
+        s.world = s.world || l.type == LightType::World;
         // A light as wide as the scene covers much of the hemisphere of points
         // near it and crosses their horizon; uniform solid angle then spends its
         // draws where cos θ is small. Measured on disks 5 cm and 1 m under
         // lights 1 m and 60 m wide (16 rounds, optimal weights): adding `bsdf`
         // cut the per-point standard deviation 3× and 11×.
-        huge = huge || planar_extent(l) >= scene.bounding_radius();
+        s.huge = s.huge || planar_extent(l) >= scene.bounding_radius();
     }
     // An emissive mesh is huge as a whole where its triangles are not.
     for (const Mesh& mesh : scene.geometry().meshes())
-        if (mesh.is_emissive()) huge = huge || mesh_extent(mesh) >= scene.bounding_radius();
+        if (mesh.is_emissive()) s.huge = s.huge || mesh_extent(mesh) >= scene.bounding_radius();
+    return s;
+}
+
+}  // namespace
+
+void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
+                        std::vector<int>& samples, int* shadowed_draws) {
+    techniques.clear();
+    samples.clear();
+    if (shadowed_draws) *shadowed_draws = 1;
+    const IntegratedLights lights = integrated_lights(scene);
+    const int integrated = lights.count;
+    const bool world = lights.world, huge = lights.huge;
     auto add = [&](const char* name, int count) {
         techniques.push_back(*parse_technique(name));
         samples.push_back(count);
