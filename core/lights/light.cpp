@@ -191,6 +191,19 @@ struct EllipseReach {
     bool whole = true;
     std::optional<ClippedDisk> part;
     bool none() const { return !whole && !part; }
+    // A box [a0, a1] × [b0, b1] in (α, β) around what reaches x: the part's,
+    // else the whole ellipse's.
+    struct Box {
+        double a0 = -1, a1 = 1, b0 = -1, b1 = 1;
+    };
+    Box box() const {
+        Box b;
+        if (part) {
+            const Point2 lo = part->box_min(), hi = part->box_max();
+            b = {lo.x, hi.x, lo.y, hi.y};
+        }
+        return b;
+    }
 };
 
 EllipseReach ellipse_reach(const Light& l, const Vec3& x) {
@@ -551,13 +564,10 @@ bool light_reaches(const Light& l, const Vec3& x, const Vec3& n) {
             const EllipseLight& e = l.ellipse;
             const EllipseReach reach = ellipse_reach(l, x);
             if (reach.none() || !in_front(e.center)) return false;
-            double a0 = -1, a1 = 1, b0 = -1, b1 = 1;  // a box around what reaches x
-            if (reach.part) {
-                const Point2 lo = reach.part->box_min(), hi = reach.part->box_max();
-                a0 = lo.x, a1 = hi.x, b0 = lo.y, b1 = hi.y;
-            }
+            const EllipseReach::Box box = reach.box();
             auto at = [&](double a, double b) { return e.center + e.axis_a * a + e.axis_b * b; };
-            return above({at(a0, b0), at(a0, b1), at(a1, b0), at(a1, b1)});
+            return above({at(box.a0, box.b0), at(box.a0, box.b1), at(box.a1, box.b0),
+                          at(box.a1, box.b1)});
         }
         case LightType::Triangle: {
             const TriangleLight& t = l.triangle;
@@ -799,15 +809,11 @@ double unoccluded_irradiance(const Light& l, const Vec3& x, const Vec3& n) {
                 // Over the ellipse's part inside the spread's box (ellipse_reach),
                 // weighted by the spread factor: 3² cells (the ellipse's edge
                 // crosses some) keep it within 10 %.
-                double a0 = -1, a1 = 1, b0 = -1, b1 = 1;
-                const EllipseReach reach = ellipse_reach(l, x);
-                if (reach.part) {
-                    const Point2 lo = reach.part->box_min(), hi = reach.part->box_max();
-                    a0 = lo.x, a1 = hi.x, b0 = lo.y, b1 = hi.y;
-                }
+                const EllipseReach::Box box = ellipse_reach(l, x).box();
                 return spread_weighted_irradiance(
                     l, x, n, [&](double a, double b) { return e.center + e.axis_a * a + e.axis_b * b; },
-                    [](double a, double b) { return a * a + b * b <= 1; }, a0, a1, b0, b1, 3);
+                    [](double a, double b) { return a * a + b * b <= 1; }, box.a0, box.a1, box.b0,
+                    box.b1, 3);
             }
             // A 32-gon is ample for a selection weight (error ~1e-3).
             return lum * ellipse_irradiance(x, n, e.center, e.axis_a, e.axis_b, 32);

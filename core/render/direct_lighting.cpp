@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "render/progress_throttle.h"
 #include "scene/ray_offset.h"
 
 namespace omis {
@@ -35,17 +36,15 @@ DirectLightingStats direct_lighting(const Scene& scene, const double* points,
     std::atomic<bool> cancel{false};
     std::atomic<std::size_t> done{0};
     std::mutex report;
-    // Inside long points: report progress now and then (at most every 50 ms)
+    // Inside long points: report progress now and then (ProgressThrottle)
     // and stop once it asks to.
-    std::atomic<double> last_report{0};
+    ProgressThrottle throttle;
     auto seconds = [&] {
         return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     };
     context.keep_going = [&] {
-        const double now = seconds();
-        if (progress && now - last_report.load(std::memory_order_relaxed) >= 0.05) {
+        if (progress && throttle.due(seconds())) {
             std::unique_lock<std::mutex> lock(report, std::try_to_lock);
-            last_report = now;
             if (lock.owns_lock() && !progress(double(done.load()) / double(count))) cancel = true;
         }
         return !cancel.load(std::memory_order_relaxed);
