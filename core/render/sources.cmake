@@ -17,6 +17,7 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/point_estimate.cpp
     ${CMAKE_CURRENT_LIST_DIR}/receiver.cpp
     ${CMAKE_CURRENT_LIST_DIR}/light_selection.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/light_tree_walk.cpp
     ${CMAKE_CURRENT_LIST_DIR}/texel_tables.cpp
 )
 target_link_libraries(omis_core PUBLIC TBB::tbb)
