@@ -12,7 +12,7 @@ namespace omis {
 struct PointLighting::Impl::RoundLoop {
     Impl& impl;
     const Active& active;
-    LightStreams& light_streams;
+    LightSequences& light_sequences;
     const int* counts;
     int first_round, rounds, K;
     const SurfacePoint& centre;
@@ -22,13 +22,13 @@ struct PointLighting::Impl::RoundLoop {
     // Technique k's draw j of round r: its index in its stream's sequence.
     std::uint32_t index_of(int k, int r, int j) const {
         const int s = r % K;
-        return impl.draw_start(k, s) +
-               (std::uint32_t(r / K) - std::uint32_t(rounds_in_stream(s, first_round, K))) *
+        return impl.draws_.start(k, s) +
+               (std::uint32_t(r / K) - std::uint32_t(TechniqueDraws::rounds_in_stream(s, first_round, K))) *
                    std::uint32_t(counts[k]) +
                std::uint32_t(j);
     }
     bool draws_ahead(int k) const {
-        return !impl.p_.settings.techniques[k].bsdf && !light_streams.uses_table(k);
+        return !impl.p_.settings.techniques[k].bsdf && !light_sequences.uses_table(k);
     }
     // Moves (r, a, j) to the sample after it in the loop's order; false past
     // the call's last.
@@ -50,7 +50,7 @@ struct PointLighting::Impl::RoundLoop {
         int k = active.all[a];
         if (draws_ahead(k)) {
             SelectorDraw& next = impl.selector_draws_[(now + 1) % kSelectorDraws];
-            const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), r % K);
+            const ScrambledSobol& seq = impl.draws_.sequence(std::size_t(k), r % K);
             const std::uint32_t index = index_of(k, r, j);
             if (next.is(k, seq, index)) impl.finish_selector_draw(next);
             else impl.draw_selector(k, seq, index, centre, footprint, next);
@@ -59,7 +59,7 @@ struct PointLighting::Impl::RoundLoop {
         if (!advance(r, a, j)) return;
         k = active.all[a];
         if (!draws_ahead(k)) return;
-        impl.begin_selector_draw(k, impl.technique_sequence(std::size_t(k), r % K),
+        impl.begin_selector_draw(k, impl.draws_.sequence(std::size_t(k), r % K),
                                  index_of(k, r, j), centre, footprint,
                                  impl.selector_draws_[(now + 2) % kSelectorDraws]);
     }
@@ -68,8 +68,8 @@ struct PointLighting::Impl::RoundLoop {
         const int s = r % K;
         for (std::size_t a = 0; a < active.all.size(); ++a) {
             const int k = active.all[a];
-            const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), s);
-            const bool table = light_streams.uses_table(k);
+            const ScrambledSobol& seq = impl.draws_.sequence(std::size_t(k), s);
+            const bool table = light_sequences.uses_table(k);
             const bool from_selector = draws_ahead(k);
             for (int j = 0; j < counts[k]; ++j) {
                 const std::uint32_t index = index_of(k, r, j);
@@ -82,7 +82,7 @@ struct PointLighting::Impl::RoundLoop {
                 }
                 if (impl.draw_next_ahead_) draw_after(r, a, j);
                 impl.take_sample(active, a, seq, index, centre, footprint, into, n_into,
-                                 table ? light_streams.draw(k, s, seq, index) : TableDraw{},
+                                 table ? light_sequences.draw(k, s, seq, index) : TableDraw{},
                                  selected);
                 now = (now + 1) % kSelectorDraws;
             }
@@ -97,7 +97,7 @@ void PointLighting::Impl::add_delta_round(int r, const SurfacePoint& centre,
     const int K = p_.settings.streams;
     const int s = r % K;
     const std::uint32_t round_in_stream = std::uint32_t(r / K);
-    const ScrambledSobol& seq = technique_sequence(p_.settings.techniques.size(), s);
+    const ScrambledSobol& seq = draws_.sequence(p_.settings.techniques.size(), s);
     SurfacePoint at = centre;
     if (footprint) {
         double fu, fv;
@@ -137,12 +137,8 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
     // positions vary, take one position per round from a sequence of their own.
     const int K = p_.settings.streams;
     const std::uint64_t base = mix64(p_.settings.seed ^ mix64(point));
-    sequence_base_ = base;
-    forget_sequences(technique_sequences_, (p_.settings.techniques.size() + 1) * std::size_t(K));
-    set_draw_starts(first_round, earlier);
-    if (m > 1)
-        for (std::uint32_t& start : draw_start_) start *= std::uint32_t(m);
-    LightStreams light_streams(*this, base, point, active);
+    draws_.begin_point(base, first_round, earlier, m);
+    LightSequences light_sequences(draws_, tables_, point, active.lights);
     const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
     set_up_estimators(active, plan, counts, counts_in != nullptr || m > 1, all, per);
@@ -155,7 +151,7 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
     ScopedTimer rounds_timer(setup_timing_ && setup_timing_->on ? &setup_timing_->rounds
                                                                  : nullptr);
     for (SelectorDraw& d : selector_draws_) d.k = -1;  // last call's: other sequences
-    RoundLoop loop{*this, active, light_streams, counts, first_round, rounds, K, centre, footprint};
+    RoundLoop loop{*this, active, light_sequences, counts, first_round, rounds, K, centre, footprint};
     for (int r = first_round; r < first_round + rounds; ++r) {
         if (delta.per_round) add_delta_round(r, centre, footprint, delta);
         const Estimators into[2] = {all, per[r % K]};
@@ -163,7 +159,7 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
         loop.round(r, into, by_stream_only ? 2 : 1);
     }
     rounds_timer.stop();
-    light_streams.keep();
+    light_sequences.keep();
     if (!delta.per_round && !p_.delta.empty()) delta.at_centre = integrand_.delta_lighting(centre, 0.0);
 
     Vec3 own_variance, error_variance;

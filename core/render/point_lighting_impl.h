@@ -9,6 +9,7 @@
 #include "render/light_tables.h"
 #include "render/lights_along.h"
 #include "render/shape_draws.h"
+#include "render/technique_draws.h"
 
 #include <algorithm>
 #include <atomic>
@@ -119,16 +120,13 @@ constexpr std::size_t kMaxTinyShapeTable = 4096;
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
         : p_(context), counters(counters), tables_(context), shapes_(context),
-          lights_along_(context, shapes_, counters), integrand_(context, lights_along_, counters) {
-        // Where each table technique's counts lie among a point's kept ones
-        // (LightingContext::keep_draw_counts' layout).
-        // Likewise their probes' reach (LightingContext::keep_table_reach's).
-        std::size_t cells = 0, reach_cells = 0;
+          lights_along_(context, shapes_, counters), integrand_(context, lights_along_, counters), draws_(context) {
+        // Where each table technique's probes' reach lies among a point's
+        // kept ones (LightingContext::keep_table_reach's layout).
+        std::size_t reach_cells = 0;
         for (const Technique& t : p_.settings.techniques) {
             const bool table = !t.bsdf && !p_.selector(t.selection);
-            kept_counts_at_.push_back(table ? cells : ~std::size_t(0));
             kept_reach_at_.push_back(table ? reach_cells : ~std::size_t(0));
-            if (table) cells += std::size_t(p_.settings.streams) * p_.integrated.size();
             if (table) reach_cells += p_.integrated.size();
         }
     }
@@ -215,13 +213,6 @@ struct PointLighting::Impl {
     void take_occluder_sample(const Active& active, const SurfacePoint& p, double u_face,
                               double u1, double u2, const Vec3& w, bool ok, int hidden_index,
                               const Estimators* into, int n_into);
-    // A light drawn from a per-point table before the sample (LightStreams):
-    // its slot in the table, its shape point and its footprint position.
-    struct TableDraw {
-        int slot = -1;  // -1: take_sample selects (bsdf, selectors)
-        double u1 = 0, u2 = 0;
-        double fu = 0, fv = 0;
-    };
     // A selector technique's draw, made ahead of its sample (shade): its
     // footprint position, its light and the shape's pair (u1 the selection's
     // rest). Two samples ahead the tree is walked down to a cluster, whose
@@ -271,53 +262,13 @@ struct PointLighting::Impl {
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
                      const Estimators* into, int n_into, const TableDraw& drawn,
                      const SelectorDraw* selected);
-    // Sample allocation (issue 10): where each technique's draws of a call
-    // start in each stream's sequence — after those of the earlier calls,
-    // whose counts may differ from the settings' — and the pilot recording.
-    void set_draw_starts(int first_round, const std::vector<DrawnRounds>* earlier);
-    std::uint32_t draw_start(int k, int s) const {
-        return draw_start_[std::size_t(k) * std::size_t(p_.settings.streams) + std::size_t(s)];
-    }
-    // Rounds of stream s (of K) among rounds [0, end_round).
-    static int rounds_in_stream(int s, int end_round, int K) {
-        return end_round > s ? (end_round - s + K - 1) / K : 0;
-    }
     void record_sample(const Active& active, std::size_t a, const double* pdfs, const Vec3& f,
                        std::uint64_t rays_before);
-    std::vector<std::uint32_t> draw_start_;
     AllocationPilot* pilot_ = nullptr;
     PointLighting::SetupTiming* setup_timing_ = nullptr;  // the owner's
-    class LightStreams;
-    // LightStreams' storage, kept from point to point (no allocation per
-    // point and pass): per technique, stream and table slot, the draws taken
-    // and the slot's own sequence once made.
-    std::vector<std::uint32_t> taken_scratch_;
-    std::vector<std::optional<ScrambledSobol>> sequences_scratch_;
-    // Per table technique, the offset of its counts among a point's kept
-    // ones (LightingContext::draw_counts); ~0 for the others.
-    std::vector<std::size_t> kept_counts_at_;
-    std::vector<std::size_t> kept_reach_at_;  // ... of its reach (LightingContext::table_reach)
-    // Each (technique, stream) sequence of the point being shaded, and the
-    // delta lights' per stream (technique index techniques.size()): made at
-    // its first use in a call, not at every round or by every user — its
-    // seed hashes were ~190 of a sample's ~5,150 instructions on an
-    // emission_world-like bake (callgrind). Same seeds: bit-identical results.
-    std::vector<std::optional<ScrambledSobol>> technique_sequences_;
-    std::uint64_t sequence_base_ = 0;  // the point's (shade)
-    // `count` sequences, none made yet: clears only their flags (assigning
-    // nullopt copied whole ~100-byte objects, ~5 % of a later pass's
-    // repeated work).
-    static void forget_sequences(std::vector<std::optional<ScrambledSobol>>& sequences,
-                                 std::size_t count) {
-        sequences.resize(count);
-        for (std::optional<ScrambledSobol>& s : sequences) s.reset();
-    }
-    const ScrambledSobol& technique_sequence(std::size_t k, int s) {
-        const std::size_t K = std::size_t(p_.settings.streams);
-        std::optional<ScrambledSobol>& built = technique_sequences_[k * K + std::size_t(s)];
-        if (!built) built.emplace(sequence_base_ ^ mix64(std::uint64_t(k) * K + std::uint64_t(s) + 1));
-        return *built;
-    }
+    // Per table technique, the offset of its probes' reach among a point's
+    // kept ones (LightingContext::table_reach); ~0 for the others.
+    std::vector<std::size_t> kept_reach_at_;
     // shade's pieces: how its rounds fall into the streams, the estimators
     // they go to, the delta lights' sums, and the point's estimate from them.
     struct RoundPlan {
@@ -385,6 +336,7 @@ struct PointLighting::Impl {
     ShapeDraws shapes_;    // light shape draws and densities at the position
     LightsAlong lights_along_;  // the lights along the last direction asked about
     Integrand integrand_;       // the integrand along a direction, delta lights
+    TechniqueDraws draws_;      // each technique's sequences and draw starts at the point
     std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
     // A table technique's density along a direction whose lights are not
     // listed yet: up to this many lights, a loop over the table's (a shape
@@ -451,135 +403,5 @@ struct PointLighting::Impl {
                                         LightSelector::Memo*& memo);
 };
 
-// Per-light sample streams for the light techniques that draw from a
-// per-point table: the table picks a light by the technique sequence's
-// selection dimension, and the light's shape point is the next unused point
-// of that light's OWN scrambled sequence (per technique, stream and light).
-// Each light's draws then form a stratified prefix whatever its share — a
-// strip of one shared net is stratified only for dyadic shares, and a shape
-// taken from an unrelated dimension not at all. The draw's footprint
-// position comes from the same point of that sequence: one 4-D Sobol' point
-// (ScrambledSobol::get_4d), the shape from dimensions 0–1 (a (0,2)-net), the
-// position from 2–3, all four a (3,m,4)-net, so a light's draws are
-// stratified in position and light point together. That matters in a
-// penumbra, where visibility depends on both. On a penumbra texel lit by two
-// lights (tests/core/test_footprint_strata.cpp), the variance at 256 samples
-// over one sample's: positions from the technique's sequence 1/680; from the
-// light's sequence as a second 2-D pair, shuffled apart (padding) 1/1400;
-// the 4-D point 1/4860. On the demo room's 128² floor (4.7 cm texels),
-// relMSE at 256 equal samples against Cycles' (3 seeds): 1.03 → 0.66, its
-// penumbrae (edge texels) 0.97 → 0.57; shared_image (1.6 cm texels) 0.99 →
-// 0.93 (issue 9; bench/results/error_sources.txt). Unbiased: a light's sequence
-// is independent of the selections, so its next point is uniform whatever
-// the count, in position as in shape. A later pass continues every count:
-// the table is the same at every pass, so the counts are those the point's
-// last call left (LightingContext::draw_counts, where kept), else the
-// selections of earlier rounds are replayed (cheap per draw: no rays, one
-// table lookup each; but every pass replays them all).
-class PointLighting::Impl::LightStreams {
-public:
-    LightStreams(Impl& impl, std::uint64_t base, std::uint64_t point, const Active& active)
-        : impl_(impl), base_(base), lights_(table_slots(impl)),
-          streams_(impl.p_.settings.streams), taken_(impl.taken_scratch_),
-          sequences_(impl.sequences_scratch_), kept_(impl.p_.draw_counts.of(point)),
-          active_(active) {
-        const auto& techniques = impl.p_.settings.techniques;
-        // Counts only where a technique draws from a table: zeroing them per
-        // point for 16k tree-drawn lights cost 40 % of an emissive mesh's bake.
-        if (std::none_of(active.lights.begin(), active.lights.end(),
-                         [&](int k) { return uses_table(k); }))
-            return;
-        taken_.assign(techniques.size() * std::size_t(streams_) * lights_, 0);
-        forget_sequences(sequences_, taken_.size());
-        for (int k : active.lights) {
-            if (!uses_table(k)) continue;
-            for (int s = 0; s < streams_; ++s) {
-                const std::uint32_t start = impl.draw_start(k, s);
-                if (start == 0) continue;  // a first pass: nothing to count
-                const ScrambledSobol& seq = impl.technique_sequence(std::size_t(k), s);
-                for (std::uint32_t i = restore(k, s, start); i < start; ++i)
-                    ++count(k, s, slot(k, seq, i));
-            }
-        }
-    }
-    bool uses_table(int k) const {
-        return impl_.kept_counts_at_[std::size_t(k)] != ~std::size_t(0);
-    }
-    // Leaves the counts for the point's next call (after all of this one's draws).
-    void keep() const {
-        if (!kept_) return;
-        for (int k : active_.lights)
-            if (uses_table(k))
-                for (int s = 0; s < streams_; ++s) {
-                    std::uint32_t* to = kept(k, s);
-                    const std::size_t n = table_size(k);
-                    for (std::size_t i = 0; i < n; ++i) to[i] = taken_[cell(k, s, int(i))];
-                }
-    }
-    // Technique k's draw `index` of stream s: its light and shape point.
-    TableDraw draw(int k, int s, const ScrambledSobol& seq, std::uint32_t index) {
-        TableDraw d;
-        d.slot = slot(k, seq, index);
-        const std::size_t at = cell(k, s, d.slot);
-        std::optional<ScrambledSobol>& light_sequence = sequences_[at];
-        if (!light_sequence) {  // made at its light's first draw of the point
-            const std::uint64_t id = (std::uint64_t(k) * streams_ + std::uint64_t(s)) << 32 |
-                                     std::uint64_t(d.slot + 1);
-            light_sequence.emplace(base_ ^ mix64(0x6a09e667f3bcc909ull ^ id));
-        }
-        double u[4];
-        light_sequence->get_4d(taken_[at]++, 0, u);
-        d.u1 = u[0];
-        d.u2 = u[1];
-        d.fu = u[2];
-        d.fv = u[3];
-        return d;
-    }
-
-private:
-    // Technique k's kept counts of stream s (a slot per integrated light).
-    std::uint32_t* kept(int k, int s) const {
-        const std::size_t lights = impl_.p_.integrated.size();
-        return kept_ + impl_.kept_counts_at_[std::size_t(k)] + std::size_t(s) * lights;
-    }
-    std::size_t table_size(int k) const {
-        return std::min(impl_.tables_[k].lights.size(), impl_.p_.integrated.size());
-    }
-    // The kept counts of technique k's stream s, where they count no more
-    // than the `start` draws before this call (then a prefix of them): how
-    // many they count, from which the rest are counted. 0 where none are kept.
-    std::uint32_t restore(int k, int s, std::uint32_t start) {
-        if (!kept_) return 0;
-        const std::uint32_t* from = kept(k, s);
-        const std::size_t n = table_size(k);
-        std::uint64_t counted = 0;
-        for (std::size_t i = 0; i < n; ++i) counted += from[i];
-        if (counted > start) return 0;  // ahead of this call (a probe's): count afresh
-        for (std::size_t i = 0; i < n; ++i) count(k, s, int(i)) = from[i];
-        return std::uint32_t(counted);
-    }
-    // The longest table's size, not the scene's light count: the counts are
-    // cleared per point, and a scene of many emitter triangles (drawn through
-    // the light tree, no table) would otherwise clear a vector that long at
-    // every point and pass (16k triangles: ~0.4 s per pass at 128²).
-    static std::size_t table_slots(const Impl& impl) {
-        return impl.tables_.longest();
-    }
-    int slot(int k, const ScrambledSobol& seq, std::uint32_t index) const {
-        return impl_.tables_[k].slot(seq.get_1d(index, 1));
-    }
-    std::size_t cell(int k, int s, int slot) const {
-        return (std::size_t(k) * streams_ + std::size_t(s)) * lights_ + std::size_t(slot);
-    }
-    std::uint32_t& count(int k, int s, int slot) { return taken_[cell(k, s, slot)]; }
-    Impl& impl_;
-    std::uint64_t base_;
-    std::size_t lights_;
-    int streams_;
-    std::vector<std::uint32_t>& taken_;  // per technique, stream and table slot
-    std::vector<std::optional<ScrambledSobol>>& sequences_;  // each slot's own, per cell
-    std::uint32_t* kept_;  // the point's kept counts, or null
-    const Active& active_;
-};
 
 }  // namespace omis

@@ -1,9 +1,63 @@
-// Where each technique's draws stand: selector draws made ahead of their
-// samples, draw starts after earlier calls' rounds, and how a call's rounds
-// fall into the randomisation streams.
+// Where each technique's draws stand: its sequences and draw starts
+// (technique_draws.h), selector draws made ahead of their samples, and how a
+// call's rounds fall into the randomisation streams.
+#include "render/technique_draws.h"
+
+#include <stdexcept>
+#include <string>
+
 #include "render/point_lighting_impl.h"
 
 namespace omis {
+
+TechniqueDraws::TechniqueDraws(const LightingContext& context) : context_(context) {
+    // Where each table technique's counts lie among a point's kept ones
+    // (LightingContext::keep_draw_counts' layout).
+    std::size_t cells = 0;
+    for (const Technique& t : context.settings.techniques) {
+        const bool table = !t.bsdf && !context.selector(t.selection);
+        kept_counts_at_.push_back(table ? cells : ~std::size_t(0));
+        if (table) cells += std::size_t(context.settings.streams) * context.integrated.size();
+    }
+}
+
+void TechniqueDraws::begin_point(std::uint64_t base, int first_round,
+                                 const std::vector<DrawnRounds>* earlier, int draws_per_count) {
+    const std::size_t K = std::size_t(context_.settings.streams);
+    base_ = base;
+    forget_sequences(sequences_, (context_.settings.techniques.size() + 1) * K);
+    set_starts(first_round, earlier);
+    if (draws_per_count > 1)
+        for (std::uint32_t& start : starts_) start *= std::uint32_t(draws_per_count);
+}
+
+void TechniqueDraws::set_starts(int first_round, const std::vector<DrawnRounds>* earlier) {
+    const int K = context_.settings.streams;
+    const std::vector<int>& samples = context_.settings.samples;
+    starts_.assign(samples.size() * K, 0);
+    if (!earlier) {
+        for (std::size_t k = 0; k < samples.size(); ++k)
+            for (int s = 0; s < K; ++s)
+                starts_[k * K + s] = std::uint32_t(rounds_in_stream(s, first_round, K) * samples[k]);
+        return;
+    }
+    int next = 0;
+    for (const DrawnRounds& d : *earlier) {
+        if (d.first_round != next || d.rounds < 0)
+            throw std::invalid_argument("earlier: calls must follow each other from round 0");
+        const int* counts = d.counts ? d.counts : samples.data();
+        for (std::size_t k = 0; k < samples.size(); ++k)
+            for (int s = 0; s < K; ++s)
+                starts_[k * K + s] += std::uint32_t(
+                    counts[k] * (rounds_in_stream(s, d.first_round + d.rounds, K) -
+                                 rounds_in_stream(s, d.first_round, K)));
+        next += d.rounds;
+    }
+    if (next != first_round)
+        throw std::invalid_argument("earlier: rounds add up to " + std::to_string(next) +
+                                    ", not first_round " + std::to_string(first_round));
+}
+
 
 // The selection takes u1 of the shape's pair, and the shape its rest within
 // the chosen light's share (SelectedLight::rest), as Cycles does: the draws
@@ -40,34 +94,6 @@ void PointLighting::Impl::finish_selector_draw(SelectorDraw& d) {
     d.finished = true;
     d.light = d.selector->finish_draw(d.partial);
     if (d.light) d.u1 = d.light->rest;
-}
-
-void PointLighting::Impl::set_draw_starts(int first_round,
-                                          const std::vector<DrawnRounds>* earlier) {
-    const int K = p_.settings.streams;
-    const std::vector<int>& samples = p_.settings.samples;
-    draw_start_.assign(samples.size() * K, 0);
-    if (!earlier) {
-        for (std::size_t k = 0; k < samples.size(); ++k)
-            for (int s = 0; s < K; ++s)
-                draw_start_[k * K + s] = std::uint32_t(rounds_in_stream(s, first_round, K) * samples[k]);
-        return;
-    }
-    int next = 0;
-    for (const DrawnRounds& d : *earlier) {
-        if (d.first_round != next || d.rounds < 0)
-            throw std::invalid_argument("earlier: calls must follow each other from round 0");
-        const int* counts = d.counts ? d.counts : samples.data();
-        for (std::size_t k = 0; k < samples.size(); ++k)
-            for (int s = 0; s < K; ++s)
-                draw_start_[k * K + s] += std::uint32_t(
-                    counts[k] * (rounds_in_stream(s, d.first_round + d.rounds, K) -
-                                 rounds_in_stream(s, d.first_round, K)));
-        next += d.rounds;
-    }
-    if (next != first_round)
-        throw std::invalid_argument("earlier: rounds add up to " + std::to_string(next) +
-                                    ", not first_round " + std::to_string(first_round));
 }
 
 // How a call's rounds fall into the streams, and whether each stream's
