@@ -119,8 +119,8 @@ Integrand::Value Integrand::at(const Vec3& x, const Vec3& n,
 }
 
 Integrand::Value Integrand::to_blocker(
-    const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w, std::uint32_t drawn,
-    double drawn_distance) {
+    const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w, std::uint32_t sampled_light,
+    double sampled_distance) {
     Value f;
     const double cos_theta = dot(n, w);
     if (!(cos_theta > 0)) return f;
@@ -153,7 +153,7 @@ Integrand::Value Integrand::to_blocker(
     // The drawn light seen, or hidden by an emitting surface (a closed
     // mesh's near side): the integrand is not 0, and its densities need
     // every light along w anyway — list them all at once.
-    const bool drew_light = drawn != ~0u;
+    const bool sampled = sampled_light != ~0u;
     const auto& unshaped = context_.scene.unshaped_lights();
     const std::vector<std::uint32_t>* along = &clipped_;
     if (complete) {
@@ -162,14 +162,14 @@ Integrand::Value Integrand::to_blocker(
         // the densities (technique_pdf) as it would keep its own.
         sort_unique(merged_);
         if (!unshaped.empty()) merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
-        if (drew_light) add_if_missing(merged_, drawn);
+        if (sampled) add_if_missing(merged_, sampled_light);
         along = &along_.adopt(x, w, merged_);
     } else if (!blocker && shapes_in_geometry_) {
         // Nothing hit: no emissive triangle lies along w (but the drawn one,
         // where single precision missed its edge), only the unshaped lights.
         clipped_.assign(unshaped.begin(), unshaped.end());
-        if (drew_light) add_if_missing(clipped_, drawn);
-    } else if (drew_light ? !hidden(context_.scene.lights()[drawn], drawn_distance) ||
+        if (sampled) add_if_missing(clipped_, sampled_light);
+    } else if (sampled ? !hidden(context_.scene.lights()[sampled_light], sampled_distance) ||
                                 context_.scene.geometry().mesh(blocker->mesh).is_emissive()
                           : !blocker || context_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
         along = &along_.of(x, w);
@@ -186,7 +186,7 @@ Integrand::Value Integrand::to_blocker(
         // by no shape: `hidden` below judges them by their distance.
         clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
         // As lights_along(): the drawn light surely lies along w.
-        if (drew_light) add_if_missing(clipped_, drawn);
+        if (sampled) add_if_missing(clipped_, sampled_light);
     }
     // The triangles' hit tests kept for their densities (Along::tests).
     TriangleTest* tests = along_.is_list(along) ? along_.begin_tests() : nullptr;

@@ -47,15 +47,16 @@ public:
     Value at(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     // at() where every light casts shadows (clips_at_blocker()), from the
     // closest hit first: of a direction a light technique drew toward light
-    // `drawn` (at drawn_distance from x), or with drawn = ~0u of a BSDF
-    // direction. Where the blocker hides the drawn light (or, for a BSDF
-    // direction, where there is one), only the lights up to it are listed,
-    // which are all that can be seen; where nothing is hit and every shaped
-    // light is an emissive triangle of the geometry (shapes_in_geometry_),
-    // only the unshaped lights (and the drawn one). The same value as at(),
-    // but on the edges of light shapes (a set of directions of measure zero).
+    // `sampled_light` (at sampled_distance from x), or with sampled_light =
+    // ~0u of a BSDF direction. Where the blocker hides the sampled light (or,
+    // for a BSDF direction, where there is one), only the lights up to it are
+    // listed, which are all that can be seen; where nothing is hit and every
+    // shaped light is an emissive triangle of the geometry
+    // (shapes_in_geometry_), only the unshaped lights (and the sampled one).
+    // The same value as at(), but on the edges of light shapes (a set of
+    // directions of measure zero).
     Value to_blocker(const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w,
-                     std::uint32_t drawn, double drawn_distance);
+                     std::uint32_t sampled_light, double sampled_distance);
     // Light l's own part of the integrand along w (visible from x or not).
     Value of_light(std::uint32_t l, const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w);
     // of_light before its shadow ray: light l's radiance toward x along w,

@@ -21,7 +21,7 @@ double PointLighting::Impl::technique_pdf(int k, const Vec3& x, const Vec3& n, c
             // The shape's density first: it is 0 for most extra candidates,
             // and then the tree need not be walked.
             if (!(shape[i] > 0)) continue;
-            const DrawnSelection& d = drawn_selection_;
+            const SampleSelection& d = sample_selection_;
             pdf += (s == d.selector && along[i] == d.light ? d.pmf : s->pmf(at, along[i], memo)) *
                    shape[i];
         }

@@ -192,6 +192,18 @@ double LightTables::centre_weight(std::size_t i, const SurfacePoint& centre) {
     return unoccluded_irradiance(light, centre.x, centre.n);
 }
 
+std::vector<std::size_t> table_technique_offsets(const LightingContext& context,
+                                                 std::size_t cells) {
+    std::vector<std::size_t> at;
+    std::size_t next = 0;
+    for (const Technique& t : context.settings.techniques) {
+        const bool table = !t.bsdf && !context.selector(t.selection);
+        at.push_back(table ? next : ~std::size_t(0));
+        if (table) next += cells;
+    }
+    return at;
+}
+
 void LightTables::restore(int k, const std::vector<std::uint32_t>& lights,
                           const std::vector<double>& probability) {
     LightTable& c = tables_[std::size_t(k)];

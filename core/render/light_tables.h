@@ -14,6 +14,12 @@
 
 namespace omis {
 
+// Where each technique's cells lie in a per-point record that keeps
+// `cells` of them for every technique that draws from a per-point table (not
+// `bsdf`, not from a selector): their offsets, ~0 for the other techniques.
+std::vector<std::size_t> table_technique_offsets(const LightingContext& context,
+                                                 std::size_t cells);
+
 // A light technique's table at one point: the lights it may pick (in the
 // context's integrated order) and their probabilities and CDF.
 struct LightTable {

@@ -8,10 +8,7 @@ namespace omis {
 const std::vector<std::uint32_t>& LightsAlong::of(const Vec3& x, const Vec3& w) {
     Along& a = along_;
     if (listed(x, w)) return a.lights;
-    a.x = x;
-    a.w = w;
-    a.valid = true;
-    ++serial_;
+    start_list(x, w);
     a.lights.clear();
     context_.scene.emitter_shapes().lights_along(x, w, a.lights);
     const auto& unshaped = context_.scene.unshaped_lights();
@@ -25,10 +22,7 @@ const std::vector<std::uint32_t>& LightsAlong::of(const Vec3& x, const Vec3& w) 
 
 const std::vector<std::uint32_t>& LightsAlong::adopt(const Vec3& x, const Vec3& w,
                                                      std::vector<std::uint32_t>& lights) {
-    along_.x = x;
-    along_.w = w;
-    along_.valid = true;
-    ++serial_;
+    start_list(x, w);
     along_.lights.swap(lights);
     return along_.lights;
 }

@@ -59,6 +59,15 @@ public:
                                           const Vec3& w);
 
 private:
+    // A new list, for (x, w): the hit tests and shape densities kept are
+    // those of an older one from now on.
+    void start_list(const Vec3& x, const Vec3& w) {
+        along_.x = x;
+        along_.w = w;
+        along_.valid = true;
+        ++serial_;
+    }
+
     const LightingContext& context_;
     ShapeDraws& shapes_;
     LightingCounters& counters_;

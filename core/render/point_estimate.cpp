@@ -1,10 +1,27 @@
 // A point's estimators and its estimate: the estimator pair (main, hidden
 // part), the per-stream estimates and cross-fitting, the variance.
-#include "render/point_lighting_impl.h"
+#include "render/point_estimate.h"
+
+#include <algorithm>
 
 namespace omis {
 
-MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
+// How a call's rounds fall into the streams, and whether each stream's
+// estimate is kept: for the error when asked, and for the optimal strategies'
+// choice against balance (balance_is_better).
+RoundPlan PointEstimate::plan_rounds(int first_round, int rounds, bool want_error) const {
+    RoundPlan plan;
+    plan.rounds = rounds;
+    const int streams = context_.settings.streams;
+    for (int r = first_round; r < first_round + rounds; ++r) ++plan.stream_rounds[r % streams];
+    plan.streams_used = int(std::count_if(plan.stream_rounds, plan.stream_rounds + streams,
+                                          [](int m) { return m > 0; }));
+    plan.by_stream = plan.streams_used >= 2 && (want_error || is_optimal(context_.settings.strategy));
+    plan.in_whole = streams_in_whole(context_.settings.strategy, plan.by_stream);
+    return plan;
+}
+
+MisEstimator& PointEstimate::estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
                                              std::uint64_t key, const std::vector<int>& active,
                                              const int* counts, bool fresh) {
     auto it = cache.find(key);
@@ -22,13 +39,13 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     if (it == cache.end()) {
         std::vector<int> n;
         for (int k : active) n.push_back(counts[k]);
-        StrategyOptions options = p_.settings.options;
+        StrategyOptions options = context_.settings.options;
         options.sequence_rounds = true;  // each technique draws one scrambled sequence
         // One technique: every weighting is 1 and the optimal α is the mean
         // itself, so each strategy's estimate is the plain mean of f/p, which
         // the balance heuristic forms without the optimal moments and solve
         // (~5 % of a one-round pass on the race's one-technique scenes).
-        const Strategy strategy = active.size() == 1 ? Strategy::Balance : p_.settings.strategy;
+        const Strategy strategy = active.size() == 1 ? Strategy::Balance : context_.settings.strategy;
         it = cache.emplace(key, MisEstimator(strategy, int(active.size()), 3, n, options))
                  .first;
     }
@@ -36,7 +53,7 @@ MisEstimator& PointLighting::Impl::estimator(std::unordered_map<std::uint64_t, M
     return it->second;
 }
 
-Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
+Vec3 PointEstimate::balance_of(const EstimatorPair& e) {
     Vec3 total;
     for (const MisEstimator* m : {e.main, e.hidden}) {
         if (!m) continue;
@@ -47,12 +64,12 @@ Vec3 PointLighting::Impl::balance_of(const Estimators& e) {
     return total;
 }
 
-void PointLighting::Impl::set_streams(const Estimators& all, int count) {
+void PointEstimate::set_streams(const EstimatorPair& all, int count) {
     all.main->set_streams(count);
     if (all.hidden) all.hidden->set_streams(count);
 }
 
-void PointLighting::Impl::set_stream(const Estimators& all, int s) {
+void PointEstimate::set_stream(const EstimatorPair& all, int s) {
     all.main->set_stream(s);
     if (all.hidden) all.hidden->set_stream(s);
 }
@@ -64,7 +81,7 @@ void PointLighting::Impl::set_stream(const Estimators& all, int s) {
 // estimator's actual error; the point keeps whichever spreads less (luminance,
 // weighted by the streams' rounds). A selection from 4 streams is noisy, but
 // it picks between two unbiased-or-consistent estimates of the same value.
-bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* balance,
+bool PointEstimate::balance_is_better(const Vec3* optimal, const Vec3* balance,
                                             const int* stream_rounds) {
     double rounds = 0, mean_o = 0, mean_b = 0;
     double opt[kMaxSampleStreams], bal[kMaxSampleStreams];
@@ -87,7 +104,7 @@ bool PointLighting::Impl::balance_is_better(const Vec3* optimal, const Vec3* bal
     return spread_b < spread_o;
 }
 
-Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
+Vec3 PointEstimate::estimate_of(const EstimatorPair& e, Vec3* variance) {
     Vec3 total;
     const MisEstimator* estimators[2] = {e.main, e.hidden};
     for (int i = 0; i < 2; ++i) {
@@ -103,7 +120,7 @@ Vec3 PointLighting::Impl::estimate_of(const Estimators& e, Vec3* variance) {
 // optimal-direct's stream s is corrected with the α solved from the other
 // streams (cross-fitting by stream): the streams' spread then holds the
 // fit's error too, which one α common to all of them hides (issue 10).
-void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_fit,
+void PointEstimate::stream_of(const EstimatorPair& whole, int s, bool cross_fit,
                                     Vec3& balance, Vec3& corrected) const {
     balance = corrected = Vec3();
     const MisEstimator* estimators[2] = {whole.main, whole.hidden};
@@ -119,38 +136,26 @@ void PointLighting::Impl::stream_of(const Estimators& whole, int s, bool cross_f
     }
 }
 
-void PointLighting::Impl::set_hidden_part(Active& active) const {
-    active.hidden.clear();
-    active.hidden_mask = 0;
-    if (!p_.plan.bsdf_invisible_lights && integrand_.world_through() == ~0u) return;
-    for (int k : active.all)
-        if (in_hidden_part(k)) {
-            active.hidden.push_back(k);
-            active.hidden_mask |= std::uint64_t(1) << k;
-        }
-}
 
 // Estimators: one over all rounds (with per-stream sums inside when
 // plan.in_whole), else one more per stream that holds rounds.
-void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPlan& plan,
-                                            const int* counts, bool fresh, Estimators& all,
-                                            Estimators* per) {
-    if (active.all.empty()) return;
+void PointEstimate::set_up(const std::vector<int>& main, std::uint64_t main_mask,
+                           const std::vector<int>& hidden_techniques, std::uint64_t hidden_mask,
+                           const RoundPlan& plan, const int* counts, bool fresh,
+                           EstimatorPair& all, EstimatorPair* per) {
     const std::uint64_t fresh_key = fresh ? std::uint64_t(1) << 50 : 0;  // uncached counts
-    const bool hidden = !active.hidden.empty();
-    const std::vector<int>& main = main_techniques(active);
-    const std::uint64_t main_mask = split_parts(active) ? active.light_mask : active.mask;
-    for (int s = -1; s < p_.settings.streams; ++s) {
+    const bool hidden = !hidden_techniques.empty();
+    for (int s = -1; s < context_.settings.streams; ++s) {
         if (s >= 0 && (!plan.by_stream || plan.in_whole || plan.stream_rounds[s] == 0)) continue;
         const std::uint64_t key = fresh_key | (std::uint64_t(s + 1) << 40);
-        Estimators& e = s < 0 ? all : per[s];
-        if (s < 0) counters.systems += hidden ? 2 : 1;  // streams only measure the error
+        EstimatorPair& e = s < 0 ? all : per[s];
+        if (s < 0) counters_.systems += hidden ? 2 : 1;  // streams only measure the error
         e.main = &estimator(main_cache_, key | main_mask, main, counts, fresh);
         if (hidden)
-            e.hidden = &estimator(hidden_cache_, key | active.hidden_mask, active.hidden, counts,
+            e.hidden = &estimator(hidden_cache_, key | hidden_mask, hidden_techniques, counts,
                                   fresh);
     }
-    set_streams(all, plan.in_whole ? p_.settings.streams : 0);
+    set_streams(all, plan.in_whole ? context_.settings.streams : 0);
 }
 
 // The point's estimate once its rounds are in: the whole's estimate, then
@@ -159,15 +164,14 @@ void PointLighting::Impl::set_up_estimators(const Active& active, const RoundPla
 // optimal-direct's streams are cross-fitted (stream_of) and their mean is its
 // estimate, so that spread is its error. own_variance: as for
 // independent draws; error_variance: from the streams' spread when kept.
-Vec3 PointLighting::Impl::point_estimate(const Active& active, const RoundPlan& plan,
-                                         const Estimators& all, const Estimators* per,
-                                         const DeltaSums& delta, Vec3& own_variance,
-                                         Vec3& error_variance, StreamEstimates* streams) {
+Vec3 PointEstimate::estimate(bool sampled, const RoundPlan& plan, const EstimatorPair& all,
+                              const EstimatorPair* per, const DeltaSums& delta,
+                              Vec3& own_variance, Vec3& error_variance,
+                              StreamEstimates* streams) {
     constexpr int K = kMaxSampleStreams;  // streams past settings.streams hold no rounds
     const int rounds = plan.rounds;
-    const bool sampled = !active.all.empty();
-    const bool optimal = is_optimal(p_.settings.strategy);
-    const bool direct = p_.settings.strategy == Strategy::OptimalDirect;
+    const bool optimal = is_optimal(context_.settings.strategy);
+    const bool direct = context_.settings.strategy == Strategy::OptimalDirect;
     own_variance = Vec3();
     Vec3 whole, total = delta.at_centre;
     if (sampled) whole = estimate_of(all, &own_variance);

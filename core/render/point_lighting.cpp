@@ -139,9 +139,12 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
     const std::uint64_t base = mix64(p_.settings.seed ^ mix64(point));
     draws_.begin_point(base, first_round, earlier, m);
     LightSequences light_sequences(draws_, tables_, point, active.lights);
-    const RoundPlan plan = plan_rounds(first_round, rounds, variance != nullptr);
+    const RoundPlan plan = estimate_.plan_rounds(first_round, rounds, variance != nullptr);
     Estimators all{nullptr, nullptr}, per[kMaxSampleStreams] = {};
-    set_up_estimators(active, plan, counts, counts_in != nullptr || m > 1, all, per);
+    if (!active.all.empty())
+        estimate_.set_up(main_techniques(active), split_parts(active) ? active.light_mask : active.mask,
+                         active.hidden, active.hidden_mask, plan, counts,
+                         counts_in != nullptr || m > 1, all, per);
 
     // Delta lights are evaluated once per round where positions vary or lights
     // are drawn, else once at the centre.
@@ -155,7 +158,7 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
     for (int r = first_round; r < first_round + rounds; ++r) {
         if (delta.per_round) add_delta_round(r, centre, footprint, delta);
         const Estimators into[2] = {all, per[r % K]};
-        if (plan.in_whole && !active.all.empty()) set_stream(all, r % K);
+        if (plan.in_whole && !active.all.empty()) PointEstimate::set_stream(all, r % K);
         loop.round(r, into, by_stream_only ? 2 : 1);
     }
     rounds_timer.stop();
@@ -165,7 +168,8 @@ void PointLighting::Impl::shade(std::uint64_t point, int first_round, int rounds
     Vec3 own_variance, error_variance;
     if (streams) *streams = StreamEstimates{};
     const Vec3 total =
-        point_estimate(active, plan, all, per, delta, own_variance, error_variance, streams);
+        estimate_.estimate(!active.all.empty(), plan, all, per, delta, own_variance,
+                           error_variance, streams);
     for (int c = 0; c < 3; ++c) {
         value[c] = total[c];
         if (variance) variance[c] = error_variance[c];
@@ -184,13 +188,13 @@ PointLighting::PointLighting(PointLighting&& other) noexcept
     if (impl_) impl_->setup_timing_ = &setup_timing;
 }
 
-void PointLighting::shade(std::uint64_t stream, int first_round, int rounds,
+void PointLighting::shade(std::uint64_t point, int first_round, int rounds,
                           const SurfacePoint& centre, const Footprint* footprint,
                           double value[3], double variance[3], const int* counts,
                           double own_variance[3], StreamEstimates* streams,
                           const std::vector<DrawnRounds>* earlier) {
     ScopedTimer timer(setup_timing.on ? &setup_timing.shading : nullptr);
-    impl_->shade(stream, first_round, rounds, centre, footprint, counts, value, variance,
+    impl_->shade(point, first_round, rounds, centre, footprint, counts, value, variance,
                  own_variance, streams, earlier);
 }
 
@@ -202,10 +206,10 @@ void PointLighting::record_into(AllocationPilot* pilot) {
     impl_->pilot_ = pilot;
 }
 
-void PointLighting::shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x,
+void PointLighting::shade(std::uint64_t point, int first_round, int rounds, const Vec3& x,
                           const Vec3& n, const Vec3& ng, double value[3],
                           double variance[3]) {
-    impl_->shade(stream, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
+    impl_->shade(point, first_round, rounds, SurfacePoint{x, n, ng}, nullptr, nullptr, value,
                  variance, nullptr, nullptr, nullptr);
 }
 

@@ -7,6 +7,7 @@
 #include "render/direct_lighting.h"
 #include "render/integrand.h"
 #include "render/light_tables.h"
+#include "render/point_estimate.h"
 #include "render/lights_along.h"
 #include "render/shape_draws.h"
 #include "render/technique_draws.h"
@@ -120,15 +121,13 @@ constexpr std::size_t kMaxTinyShapeTable = 4096;
 struct PointLighting::Impl {
     Impl(const LightingContext& context, LightingCounters& counters)
         : p_(context), counters(counters), tables_(context), shapes_(context),
-          lights_along_(context, shapes_, counters), integrand_(context, lights_along_, counters), draws_(context) {
-        // Where each table technique's probes' reach lies among a point's
-        // kept ones (LightingContext::keep_table_reach's layout).
-        std::size_t reach_cells = 0;
-        for (const Technique& t : p_.settings.techniques) {
-            const bool table = !t.bsdf && !p_.selector(t.selection);
-            kept_reach_at_.push_back(table ? reach_cells : ~std::size_t(0));
-            if (table) reach_cells += p_.integrated.size();
-        }
+          lights_along_(context, shapes_, counters),
+          integrand_(context, lights_along_, counters),
+          draws_(context),
+          estimate_(context, counters) {
+        // Each table technique's probes' reach among a point's kept ones: a
+        // byte per integrated light (LightingContext::keep_table_reach's layout).
+        kept_reach_at_ = table_technique_offsets(context, context.integrated.size());
     }
 
     void shade(std::uint64_t point, int first_round, int rounds, const SurfacePoint& centre,
@@ -174,18 +173,12 @@ struct PointLighting::Impl {
     };
     std::vector<MiddlePoint> middles_scratch_;
     // choose_active through the context's texel tables: with `keep`, a point
-    // shaded before (same stream) takes its techniques and tables from there,
+    // shaded before (same point id) takes its techniques and tables from there,
     // and one shaded first leaves them there for its next pass.
-    void active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
+    void active_for(std::uint64_t point, bool keep, const SurfacePoint& centre,
                     const Footprint* footprint, Active& active);
     void restore(const TexelTables::Entry& kept, Active& active);
-    struct Estimators {
-        MisEstimator* main;
-        // A part of the integrand only some techniques estimate (null if none):
-        // lights invisible to BSDF rays (the light techniques'), or the world
-        // seen through emitters (Integrand::world_through, `bsdf`'s).
-        MisEstimator* hidden;
-    };
+    using Estimators = EstimatorPair;
     bool in_hidden_part(int k) const {
         return p_.settings.techniques[k].bsdf == (integrand_.world_through() != ~0u);
     }
@@ -247,12 +240,12 @@ struct PointLighting::Impl {
     // shade's: the sample's, the next one's and the one's after
     static constexpr int kSelectorDraws = 3;
     SelectorDraw selector_draws_[kSelectorDraws];
-    // `drawn` for a technique that draws from a per-point table, `selected`
+    // `table_draw` for a technique that draws from a per-point table, `selected`
     // for one that draws from a selector (null for `bsdf`).
     struct SampleDraw;
     SampleDraw draw_direction(const Technique& t, int k, const SurfacePoint& p,
                               const ScrambledSobol& sequence, std::uint32_t index,
-                              const TableDraw& drawn, const SelectorDraw* selected);
+                              const TableDraw& table_draw, const SelectorDraw* selected);
     bool add_own_light_sample(const SampleDraw& d, const SurfacePoint& p, int hidden_index,
                               const Estimators* into, int n_into);
     void evaluate_and_add(const Active& active, std::size_t a, const SurfacePoint& p,
@@ -260,7 +253,7 @@ struct PointLighting::Impl {
                           int n_into);
     void take_sample(const Active& active, std::size_t a, const ScrambledSobol& sequence,
                      std::uint32_t index, const SurfacePoint& centre, const Footprint* footprint,
-                     const Estimators* into, int n_into, const TableDraw& drawn,
+                     const Estimators* into, int n_into, const TableDraw& table_draw,
                      const SelectorDraw* selected);
     void record_sample(const Active& active, std::size_t a, const double* pdfs, const Vec3& f,
                        std::uint64_t rays_before);
@@ -269,52 +262,9 @@ struct PointLighting::Impl {
     // Per table technique, the offset of its probes' reach among a point's
     // kept ones (LightingContext::table_reach); ~0 for the others.
     std::vector<std::size_t> kept_reach_at_;
-    // shade's pieces: how its rounds fall into the streams, the estimators
-    // they go to, the delta lights' sums, and the point's estimate from them.
-    struct RoundPlan {
-        int rounds = 0;
-        int stream_rounds[kMaxSampleStreams] = {};
-        int streams_used = 0;
-        bool by_stream = false;  // each stream's estimate is kept
-        bool in_whole = false;   // ... as sums inside the whole's estimators
-    };
-    RoundPlan plan_rounds(int first_round, int rounds, bool want_error) const;
-    void set_up_estimators(const Active& active, const RoundPlan& plan, const int* counts,
-                           bool fresh, Estimators& all, Estimators* per);
-    struct DeltaSums {
-        bool per_round = false;  // a position per round (else at_centre)
-        Vec3 sum[kMaxSampleStreams], sum2, at_centre;
-    };
     struct RoundLoop;
     void add_delta_round(int r, const SurfacePoint& centre, const Footprint* footprint,
                          DeltaSums& delta);
-    Vec3 point_estimate(const Active& active, const RoundPlan& plan, const Estimators& all,
-                        const Estimators* per, const DeltaSums& delta, Vec3& own_variance,
-                        Vec3& error_variance, StreamEstimates* streams);
-    // Sum of the estimates (and their own variance estimates, if asked).
-    // The estimators' results stay in results_ (main, hidden) until the next call.
-    Vec3 estimate_of(const Estimators& e, Vec3* variance = nullptr);
-    // Stream s's estimate from the whole's per-stream sums (streams_in_whole):
-    // its balance (heuristics: own) estimate, and (cross_fit, optimal-direct)
-    // that corrected with the α of the other streams (MisEstimator::stream_cross_fit).
-    void stream_of(const Estimators& whole, int s, bool cross_fit, Vec3& balance,
-                   Vec3& corrected) const;
-    // The balance heuristic's estimate from the same samples (optimal
-    // strategies accumulate it alongside their moments).
-    static Vec3 balance_of(const Estimators& e);
-    // Whether the whole's estimators keep the per-stream sums (MisEstimator::
-    // set_streams) instead of an estimator per stream: every strategy but
-    // optimal-progressive, whose stream estimates need their own cross-fit.
-    static bool streams_in_whole(Strategy strategy, bool by_stream) {
-        return by_stream && strategy != Strategy::OptimalProgressive;
-    }
-    static void set_streams(const Estimators& all, int count);
-    static void set_stream(const Estimators& all, int s);
-    MisResult results_[2];  // estimate_of's (main, hidden), reused from point to point
-    // Optimal strategies: whether the independent streams say the optimal
-    // estimate is noisier here than the balance heuristic's.
-    static bool balance_is_better(const Vec3* optimal, const Vec3* balance,
-                                  const int* stream_rounds);
 
     // Starts reading the first two cache lines of light l's record, all that
     // an emissive triangle's sample reads (light.h).
@@ -325,9 +275,6 @@ struct PointLighting::Impl {
                           double own_density, const Integrand::Value& f, const Estimators* into,
                           int n_into);
     double technique_pdf(int k, const Vec3& x, const Vec3& n, const Vec3& w);
-    MisEstimator& estimator(std::unordered_map<std::uint64_t, MisEstimator>& cache,
-                            std::uint64_t key, const std::vector<int>& active,
-                            const int* counts, bool fresh);
 
 
     const LightingContext& p_;
@@ -337,7 +284,7 @@ struct PointLighting::Impl {
     LightsAlong lights_along_;  // the lights along the last direction asked about
     Integrand integrand_;       // the integrand along a direction, delta lights
     TechniqueDraws draws_;      // each technique's sequences and draw starts at the point
-    std::unordered_map<std::uint64_t, MisEstimator> main_cache_, hidden_cache_;
+    PointEstimate estimate_;    // the point's estimators and its estimate
     // A table technique's density along a direction whose lights are not
     // listed yet: up to this many lights, a loop over the table's (a shape
     // test each, ~200 instructions) costs less than listing them (an Embree
@@ -384,11 +331,11 @@ struct PointLighting::Impl {
     // and the pmf the draw formed: its density takes that pmf, which the
     // memo does not hold for a light drawn ahead (SelectorDraw). The same
     // product pmf() would form.
-    struct DrawnSelection {
+    struct SampleSelection {
         const LightSelector* selector = nullptr;
         std::uint32_t light = ~0u;
         double pmf = 0;
-    } drawn_selection_;
+    } sample_selection_;
     // The texel being shaded as a region (LightSelector::Receiver): a ball
     // about its centre through its footprint's corners (radius 0: none).
     // Selectors draw with the region's pmfs at every sample inside it — one

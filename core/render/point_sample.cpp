@@ -12,35 +12,35 @@ struct PointLighting::Impl::SampleDraw {
     // A light sample's light, its light's share of the technique's density,
     // the shape's density and the distance to the point drawn on it.
     std::optional<SelectedLight> light;
-    double own_density = 0, shape_pdf = 0, drawn_distance = 0;
+    double own_density = 0, shape_pdf = 0, light_distance = 0;
 };
 
 PointLighting::Impl::SampleDraw PointLighting::Impl::draw_direction(
     const Technique& t, int k, const SurfacePoint& p, const ScrambledSobol& sequence,
-    std::uint32_t index, const TableDraw& drawn, const SelectorDraw* selected) {
+    std::uint32_t index, const TableDraw& table_draw, const SelectorDraw* selected) {
     SampleDraw d;
-    d.u1 = drawn.u1, d.u2 = drawn.u2;  // a table draw brings its light's own
+    d.u1 = table_draw.u1, d.u2 = table_draw.u2;  // a table draw brings its light's own
     if (t.bsdf) sequence.get_2d(index, 2, d.u1, d.u2);
-    drawn_selection_ = {};  // none but this sample's own
+    sample_selection_ = {};  // none but this sample's own
     if (t.bsdf) {
         d.w = Frame(p.n).to_world(sample_cosine_hemisphere(d.u1, d.u2));
         d.ok = dot(d.w, p.n) > 0;
         return d;
     }
-    if (drawn.slot >= 0) {
+    if (table_draw.slot >= 0) {
         const LightTable& c = tables_[k];
-        d.light = SelectedLight{c.lights[drawn.slot], c.probability[drawn.slot]};
+        d.light = SelectedLight{c.lights[table_draw.slot], c.probability[table_draw.slot]};
     } else {
         d.light = selected->light;
         d.u1 = selected->u1;
         d.u2 = selected->u2;
-        if (d.light) drawn_selection_ = {selected->selector, d.light->light, d.light->pmf};
+        if (d.light) sample_selection_ = {selected->selector, d.light->light, d.light->pmf};
     }
     const auto s =
         d.light ? shapes_.sample(d.light->light, t.sampler, p.x, p.n, d.u1, d.u2) : std::nullopt;
     d.ok = s && s->pdf > 0 && std::isfinite(s->pdf) && isfinite(s->dir);
     if (d.ok) d.w = s->dir;
-    if (d.ok) d.own_density = d.light->pmf * s->pdf, d.drawn_distance = s->dist;
+    if (d.ok) d.own_density = d.light->pmf * s->pdf, d.light_distance = s->dist;
     if (d.ok) d.shape_pdf = s->pdf;
     return d;
 }
@@ -70,7 +70,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
                                       const ScrambledSobol& sequence, std::uint32_t index,
                                       const SurfacePoint& centre, const Footprint* footprint,
                                       const Estimators* into, int n_into,
-                                      const TableDraw& drawn, const SelectorDraw* selected) {
+                                      const TableDraw& table_draw, const SelectorDraw* selected) {
     ++counters.samples;
     // Cancellation within a point (huge counts): see keep_going.
     if (p_.keep_going && counters.samples % 256 == 0 && !p_.keep_going())
@@ -79,21 +79,21 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
     // selection's bits below group 2's (a selector draws with the first
     // coordinate of group 2: draw_selector), 2 light shape or BSDF direction
     // (a light drawn from a per-point table takes its footprint position and
-    // shape from its own sequence: `drawn`).
+    // shape from its own sequence: `table_draw`).
     const int k = active.all[a];
     const Technique& t = p_.settings.techniques[k];
     // The sample's position: the centre, the selector draw's, or one drawn
     // here (referred to, not copied: two copies were ~35 instructions).
-    SurfacePoint drawn_at;
+    SurfacePoint own_position;
     const SurfacePoint* at = &centre;
     if (footprint) {
         if (selected) {
             at = &selected->p;
         } else {
-            double fu = drawn.fu, fv = drawn.fv;
+            double fu = table_draw.fu, fv = table_draw.fv;
             if (t.bsdf) sequence.get_2d(index, 0, fu, fv);
-            drawn_at = footprint->at(fu, fv);
-            at = &drawn_at;
+            own_position = footprint->at(fu, fv);
+            at = &own_position;
         }
         shapes_.new_position();  // the solid-angle cache holds one position's shapes
     }
@@ -102,7 +102,7 @@ void PointLighting::Impl::take_sample(const Active& active, std::size_t a,
         into[0].hidden && in_hidden_part(k)
             ? int(std::find(active.hidden.begin(), active.hidden.end(), k) - active.hidden.begin())
             : -1;
-    SampleDraw d = draw_direction(t, k, p, sequence, index, drawn, selected);
+    SampleDraw d = draw_direction(t, k, p, sequence, index, table_draw, selected);
     const bool own_light_only =
         own_light_estimates_ && active.all.size() == 1 && !t.bsdf && !pilot_;
     if (d.ok && own_light_only) {
@@ -139,7 +139,7 @@ void PointLighting::Impl::evaluate_and_add(const Active& active, std::size_t a,
     double pdfs[kMaxMisTechniques], hidden_pdfs[kMaxMisTechniques], main_pdfs[kMaxMisTechniques];
     std::optional<Integrand::Value> light_f;
     if (ok && d.light && integrand_.clips_at_blocker()) {
-        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, d.light->light, d.drawn_distance);
+        light_f = integrand_.to_blocker(p.x, p.n, p.ng, w, d.light->light, d.light_distance);
         if (add_unlit_sample(main_size, main_index, hidden_index, d.own_density, *light_f, into,
                              n_into))
             return;

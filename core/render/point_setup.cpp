@@ -148,22 +148,22 @@ LightSelector::Receiver PointLighting::Impl::receiver_at(const Vec3& x, const Ve
     return {x, n, 0.0};
 }
 
-void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const SurfacePoint& centre,
+void PointLighting::Impl::active_for(std::uint64_t point, bool keep, const SurfacePoint& centre,
                                      const Footprint* footprint, Active& active) {
     FootprintProbes probes(centre, footprint);
-    set_region(stream, probes);
+    set_region(point, probes);
     TexelTables& kept = p_.texel_tables;
     keep = keep && !cheap_tables_;
     if (keep)
-        if (const TexelTables::Entry* entry = kept.find(stream)) {
+        if (const TexelTables::Entry* entry = kept.find(point)) {
             restore(*entry, active);
             if (p_.settings.shadowed_draws > 1)
-                active.draws_per_count = draws_per_count_at(stream, centre);
+                active.draws_per_count = draws_per_count_at(point, centre);
             return;
         }
     ScopedTimer setup(keep && setup_timing_ && setup_timing_->on ? &setup_timing_->kept_setup
                                                                   : nullptr);
-    choose_active(stream, probes, footprint, active);
+    choose_active(point, probes, footprint, active);
     if (!keep) return;
     TexelTables::Entry entry;
     entry.mask = active.mask;
@@ -181,11 +181,11 @@ void PointLighting::Impl::active_for(std::uint64_t stream, bool keep, const Surf
     // what a later pass repeated on the race's emissive_mesh (callgrind, 64²).
     // In the map, an entry for every texel of a large map would spend the
     // budget on them.
-    if (entry.tables.empty() && !kept.has_slot(stream)) {
+    if (entry.tables.empty() && !kept.has_slot(point)) {
         setup.discard();  // nothing kept: not the kept tables' set-up
         return;
     }
-    kept.keep(stream, std::move(entry));
+    kept.keep(point, std::move(entry));
 }
 
 // choose_active's result from a kept entry: the same techniques in the same
@@ -201,6 +201,18 @@ void PointLighting::Impl::restore(const TexelTables::Entry& kept, Active& active
     for (const TexelTables::Table& t : kept.tables) {
         tables_.restore(t.technique, t.lights, t.probability);
     }
+}
+
+// The techniques of the hidden part (EstimatorPair::hidden).
+void PointLighting::Impl::set_hidden_part(Active& active) const {
+    active.hidden.clear();
+    active.hidden_mask = 0;
+    if (!p_.plan.bsdf_invisible_lights && integrand_.world_through() == ~0u) return;
+    for (int k : active.all)
+        if (in_hidden_part(k)) {
+            active.hidden.push_back(k);
+            active.hidden_mask |= std::uint64_t(1) << k;
+        }
 }
 
 }  // namespace omis

@@ -81,8 +81,8 @@ double ShapeDraws::pdf(std::uint32_t l, ShapeSampler sampler, const Vec3& x,
                                 const Vec3& n, const Vec3& w, const TriangleTest* known) {
     // The sample's own density, before the light's record is read again
     // for the tiny-light test (the draw made the same choice).
-    double drawn;
-    if (last_density(l, sampler, w, drawn)) return drawn;
+    double last;
+    if (last_density(l, sampler, w, last)) return last;
     const Light& light = context_.scene.lights()[l];
     if (sampler == ShapeSampler::SolidAngle && tiny(l, light, x))
         sampler = ShapeSampler::Area;

@@ -1,6 +1,5 @@
 // Where each technique's draws stand: its sequences and draw starts
-// (technique_draws.h), selector draws made ahead of their samples, and how a
-// call's rounds fall into the randomisation streams.
+// (technique_draws.h), and selector draws made ahead of their samples.
 #include "render/technique_draws.h"
 
 #include <stdexcept>
@@ -10,16 +9,12 @@
 
 namespace omis {
 
-TechniqueDraws::TechniqueDraws(const LightingContext& context) : context_(context) {
-    // Where each table technique's counts lie among a point's kept ones
-    // (LightingContext::keep_draw_counts' layout).
-    std::size_t cells = 0;
-    for (const Technique& t : context.settings.techniques) {
-        const bool table = !t.bsdf && !context.selector(t.selection);
-        kept_counts_at_.push_back(table ? cells : ~std::size_t(0));
-        if (table) cells += std::size_t(context.settings.streams) * context.integrated.size();
-    }
-}
+// Each table technique's counts among a point's kept ones: a count per
+// stream and integrated light (LightingContext::keep_draw_counts' layout).
+TechniqueDraws::TechniqueDraws(const LightingContext& context)
+    : context_(context),
+      kept_counts_at_(table_technique_offsets(
+          context, std::size_t(context.settings.streams) * context.integrated.size())) {}
 
 void TechniqueDraws::begin_point(std::uint64_t base, int first_round,
                                  const std::vector<DrawnRounds>* earlier, int draws_per_count) {
@@ -96,20 +91,5 @@ void PointLighting::Impl::finish_selector_draw(SelectorDraw& d) {
     if (d.light) d.u1 = d.light->rest;
 }
 
-// How a call's rounds fall into the streams, and whether each stream's
-// estimate is kept: for the error when asked, and for the optimal strategies'
-// choice against balance (balance_is_better).
-PointLighting::Impl::RoundPlan PointLighting::Impl::plan_rounds(int first_round, int rounds,
-                                                                bool want_error) const {
-    RoundPlan plan;
-    plan.rounds = rounds;
-    const int streams = p_.settings.streams;
-    for (int r = first_round; r < first_round + rounds; ++r) ++plan.stream_rounds[r % streams];
-    plan.streams_used = int(std::count_if(plan.stream_rounds, plan.stream_rounds + streams,
-                                          [](int m) { return m > 0; }));
-    plan.by_stream = plan.streams_used >= 2 && (want_error || is_optimal(p_.settings.strategy));
-    plan.in_whole = streams_in_whole(p_.settings.strategy, plan.by_stream);
-    return plan;
-}
 
 }  // namespace omis
