@@ -105,7 +105,7 @@ public:
     std::vector<std::uint32_t> integrated, delta;
     const std::vector<double>& power;  // per light, for `power` selection (the scene's)
     // Per light, what tells whether a rect or triangle is tiny in solid angle
-    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp);
+    // at x (then sampled by area for `solid-angle`; shape_draws.h);
     // empty among many lights, where each light's is made from the light.
     struct TinyShape {
         Vec3 centroid;
@@ -121,13 +121,13 @@ public:
     const LightSelector* power_selector = nullptr;
     const LightSelector* tree_selector = nullptr;
     const LightSelector* delta_selector = nullptr;
-    const LightSelector* selector(LightSelection selection) const;
+    const LightSelector* selector(SelectionRule selection) const;
     // Per texel (PointLighting::shade's point id), what a bake's later passes
     // reuse: the techniques taking part and their light tables.
     mutable TexelTables texel_tables;
     // Whether shading keeps anything there: not when every light technique's
     // table needs no irradiance (`uniform`, `power`: cheaper to make again
-    // at every pass than to keep; direct_lighting.cpp). A bake then need not
+    // at every pass than to keep; point_setup.cpp). A bake then need not
     // index its points in texel_tables.
     bool keeps_texel_tables = true;
     // Per point (PointLighting::shade's point id), where its table draws stand

@@ -119,7 +119,7 @@ bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techni
     for (std::size_t k = 0; k < techniques.size(); ++k) {
         if (k < samples.size() && samples[k] <= 0) continue;
         if (techniques[k].bsdf) bsdf = true;
-        else if (techniques[k].selection == LightSelection::Tree) return false;
+        else if (techniques[k].selection == SelectionRule::Tree) return false;
     }
     return bsdf;
 }
@@ -259,12 +259,12 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         else if (!t.bsdf && t.sampler == ShapeSampler::Parallel && !any_projectable)
             why = "no light with a planar region to project";
         plan.enabled.push_back(why.empty());
-        if (why.empty() && !t.bsdf && t.selection == LightSelection::Tree)
+        if (why.empty() && !t.bsdf && t.selection == SelectionRule::Tree)
             why = "applies (light tree: O(log L) selection over " +
                   std::to_string(plan.integrated_lights) + " light(s))";
         else if (why.empty() && !t.bsdf &&
-                 (t.selection == LightSelection::Unoccluded ||
-                  t.selection == LightSelection::Defensive) &&
+                 (t.selection == SelectionRule::Unoccluded ||
+                  t.selection == SelectionRule::Defensive) &&
                  plan.integrated_lights > kManyIntegratedLights)
             why = "applies (exact per-light weights: cost grows with the " +
                   std::to_string(plan.integrated_lights) + " lights; `tree` does not)";
@@ -410,7 +410,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // One sequence of N samples instead of a pair's two of N/2: see
         // bench_cycles' error per sample (README, issue 9). With a world in
         // the selection the uniform part is a tenth, not half (its cosine
-        // draws are the noisy ones: direct_lighting.cpp, mix_in_uniform).
+        // draws are the noisy ones: light_tables.cpp, mix_in_uniform).
         add("defensive/solid-angle", 1);
     }
     // The world left to `bsdf`; huge lights are what cosine sampling is good

@@ -31,8 +31,8 @@ bool LightTables::make_at(int k, const Vec3& x, const Vec3& n) {
         const Light& light = context_.scene.lights()[l];
         if (!sampler_applies(light, t.sampler, x, n)) continue;
         double w = 1.0;
-        if (t.selection == LightSelection::Power) w = context_.power[l];
-        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
+        if (t.selection == SelectionRule::Power) w = context_.power[l];
+        if (t.selection == SelectionRule::Unoccluded || t.selection == SelectionRule::Defensive)
             w = unoccluded_irradiance(light, x, n);
         c.lights.push_back(l);
         c.probability.push_back(w);
@@ -40,7 +40,7 @@ bool LightTables::make_at(int k, const Vec3& x, const Vec3& n) {
     // A light that reaches x but whose weight rounds to zero keeps a tiny share.
     normalise_weights(c.probability);
     cumulate(c.probability, c.cdf);
-    if (t.selection == LightSelection::Defensive) {
+    if (t.selection == SelectionRule::Defensive) {
         reaches_.assign(c.lights.size(), 1);  // the table holds the lights that reach x
         mix_in_uniform(k);
     }
@@ -69,13 +69,13 @@ bool LightTables::make_over(int k, FootprintProbes& probes, std::uint8_t* kept) 
     c.lights.clear();
     c.probability.clear();
     auto weight = [&](std::uint32_t l, const SurfacePoint& p) {
-        if (t.selection == LightSelection::Power) return context_.power[l];
-        if (t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive)
+        if (t.selection == SelectionRule::Power) return context_.power[l];
+        if (t.selection == SelectionRule::Unoccluded || t.selection == SelectionRule::Defensive)
             return unoccluded_irradiance(context_.scene.lights()[l], p.x, p.n);
         return 1.0;
     };
     const bool by_irradiance =
-        t.selection == LightSelection::Unoccluded || t.selection == LightSelection::Defensive;
+        t.selection == SelectionRule::Unoccluded || t.selection == SelectionRule::Defensive;
     bool any = false;
     reaches_.assign(context_.integrated.size(), 0);
     if (by_irradiance) kept = nullptr;
@@ -112,7 +112,7 @@ bool LightTables::make_over(int k, FootprintProbes& probes, std::uint8_t* kept) 
     if (!any) return false;
     normalise_weights(c.probability);
     cumulate(c.probability, c.cdf);
-    if (t.selection == LightSelection::Defensive) mix_in_uniform(k);
+    if (t.selection == SelectionRule::Defensive) mix_in_uniform(k);
     return true;
 }
 

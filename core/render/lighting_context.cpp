@@ -63,20 +63,20 @@ LightingContext::LightingContext(const Scene& scene_, const DirectLightingSettin
     const bool many = integrated.size() > std::size_t(kManyIntegratedLights);
     for (int k : techniques) {
         const Technique& t = settings.techniques[k];
-        if (t.bsdf || (!many && t.selection != LightSelection::Tree)) continue;
-        if (t.selection == LightSelection::Uniform && !uniform_selector)
+        if (t.bsdf || (!many && t.selection != SelectionRule::Tree)) continue;
+        if (t.selection == SelectionRule::Uniform && !uniform_selector)
             uniform_selector = &scene.light_selector(LightSelector::Kind::Uniform, false);
-        if (t.selection == LightSelection::Power && !power_selector)
+        if (t.selection == SelectionRule::Power && !power_selector)
             power_selector = &scene.light_selector(LightSelector::Kind::Power, false);
-        if (t.selection == LightSelection::Tree && !tree_selector)
+        if (t.selection == SelectionRule::Tree && !tree_selector)
             tree_selector = &scene.light_selector(LightSelector::Kind::Tree, false);
     }
     if (plan.sample_delta_lights)
         delta_selector = &scene.light_selector(LightSelector::Kind::Tree, true);
     keeps_texel_tables = std::any_of(
         settings.techniques.begin(), settings.techniques.end(), [](const Technique& t) {
-            return !t.bsdf && t.selection != LightSelection::Uniform &&
-                   t.selection != LightSelection::Power;
+            return !t.bsdf && t.selection != SelectionRule::Uniform &&
+                   t.selection != SelectionRule::Power;
         });
 }
 
@@ -123,7 +123,7 @@ void LightingContext::keep_region_branching(std::size_t points, std::size_t max_
     // Only the tree's memo walks nodes (set_region's memo, for its draws).
     const bool tree = std::any_of(techniques.begin(), techniques.end(), [&](int k) {
         return !settings.techniques[k].bsdf &&
-               settings.techniques[k].selection == LightSelection::Tree;
+               settings.techniques[k].selection == SelectionRule::Tree;
     });
     if (!tree || points == 0) return;
     region_nodes =
@@ -150,18 +150,18 @@ void LightingContext::keep_draw_counts(std::size_t points) {
     draw_counts.index_points(points, tables * std::size_t(settings.streams) * integrated.size());
 }
 
-const LightSelector* LightingContext::selector(LightSelection selection) const {
+const LightSelector* LightingContext::selector(SelectionRule selection) const {
     switch (selection) {
-        case LightSelection::Uniform:
+        case SelectionRule::Uniform:
             return uniform_selector && !uniform_selector->empty() ? uniform_selector : nullptr;
-        case LightSelection::Power:
+        case SelectionRule::Power:
             return power_selector && !power_selector->empty() ? power_selector : nullptr;
-        case LightSelection::Tree: {
+        case SelectionRule::Tree: {
             static const LightSelector kNoLights;  // a tree technique never built: draws nothing
             return tree_selector ? tree_selector : &kNoLights;
         }
-        case LightSelection::Unoccluded:
-        case LightSelection::Defensive: return nullptr;
+        case SelectionRule::Unoccluded:
+        case SelectionRule::Defensive: return nullptr;
     }
     return nullptr;
 }

@@ -24,8 +24,8 @@ void PointLighting::Impl::choose_active(std::uint64_t point, FootprintProbes& pr
         const Technique& t = p_.settings.techniques[k];
         irradiance_tables = irradiance_tables ||
                             (!t.bsdf && !p_.selector(t.selection) &&
-                             (t.selection == LightSelection::Unoccluded ||
-                              t.selection == LightSelection::Defensive));
+                             (t.selection == SelectionRule::Unoccluded ||
+                              t.selection == SelectionRule::Defensive));
     }
     tables_.set_anchor(irradiance_tables ? footprint : nullptr);
     if (p_.settings.shadowed_draws > 1) active.draws_per_count = draws_per_count_at(point, probes[0]);
