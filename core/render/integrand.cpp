@@ -118,6 +118,55 @@ Integrand::Value Integrand::at(const Vec3& x, const Vec3& n,
     return f;
 }
 
+// to_blocker's lights along w, from its closest hit `blocker` (`complete`:
+// the traversal listed every light along w in merged_).
+const std::vector<std::uint32_t>& Integrand::lights_to_blocker(
+    const Vec3& x, const Vec3& w, const std::optional<RayHit>& blocker, bool complete,
+    double offset, std::uint32_t sampled_light, double sampled_distance) {
+    // Whether the blocker hides the sampled light (the one rule: hides).
+    auto hidden = [&](const Light& light) {
+        return blocker && hides(*blocker, light, sampled_distance - offset);
+    };
+    // The drawn light seen, or hidden by an emitting surface (a closed
+    // mesh's near side): the integrand is not 0, and its densities need
+    // every light along w anyway — list them all at once.
+    const bool sampled = sampled_light != ~0u;
+    const auto& unshaped = context_.scene.unshaped_lights();
+    if (complete) {
+        // Every light along w: what along_.of(x, w) lists (the shapes the
+        // traversal crossed, the unshaped lights, the drawn light), kept for
+        // the densities (technique_pdf) as it would keep its own.
+        sort_unique(merged_);
+        if (!unshaped.empty()) merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
+        if (sampled) add_if_missing(merged_, sampled_light);
+        return along_.adopt(x, w, merged_);
+    } else if (!blocker && shapes_in_geometry_) {
+        // Nothing hit: no emissive triangle lies along w (but the drawn one,
+        // where single precision missed its edge), only the unshaped lights.
+        clipped_.assign(unshaped.begin(), unshaped.end());
+        if (sampled) add_if_missing(clipped_, sampled_light);
+    } else if (sampled ? !hidden(context_.scene.lights()[sampled_light]) ||
+                                context_.scene.geometry().mesh(blocker->mesh).is_emissive()
+                          : !blocker || context_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
+        return along_.of(x, w);
+    } else {
+        // Hidden: no light past the blocker is seen, at most
+        // blocker->t / (1 − tolerance) + offset from x. The emitter shapes'
+        // distances are single precision: a margin far above their rounding
+        // (relative to the coordinates' size) keeps every such light listed.
+        const double reach = blocker->t / (1 - kEmitterDepthTolerance) + offset;
+        const double scale = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), reach});
+        clipped_.clear();
+        context_.scene.emitter_shapes().lights_along(x, w, clipped_, reach * (1 + 1e-4) + 1e-5 * scale);
+        // Unshaped lights (a world, a sun's disk, a point light's) are listed
+        // by no shape: to_blocker judges them by their distance.
+        clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
+        // As lights_along(): the drawn light surely lies along w.
+        if (sampled) add_if_missing(clipped_, sampled_light);
+    }
+    return clipped_;
+}
+
 Integrand::Value Integrand::to_blocker(
     const Vec3& x, const Vec3& n, const Vec3& ng, const Vec3& w, std::uint32_t sampled_light,
     double sampled_distance) {
@@ -150,44 +199,9 @@ Integrand::Value Integrand::to_blocker(
     auto hidden = [&](const Light& light, double distance) {
         return blocker && hides(*blocker, light, distance - offset);
     };
-    // The drawn light seen, or hidden by an emitting surface (a closed
-    // mesh's near side): the integrand is not 0, and its densities need
-    // every light along w anyway — list them all at once.
-    const bool sampled = sampled_light != ~0u;
-    const auto& unshaped = context_.scene.unshaped_lights();
-    const std::vector<std::uint32_t>* along = &clipped_;
-    if (complete) {
-        // Every light along w: what along_.of(x, w) lists (the shapes the
-        // traversal crossed, the unshaped lights, the drawn light), kept for
-        // the densities (technique_pdf) as it would keep its own.
-        sort_unique(merged_);
-        if (!unshaped.empty()) merged_.insert(merged_.end(), unshaped.begin(), unshaped.end());
-        if (sampled) add_if_missing(merged_, sampled_light);
-        along = &along_.adopt(x, w, merged_);
-    } else if (!blocker && shapes_in_geometry_) {
-        // Nothing hit: no emissive triangle lies along w (but the drawn one,
-        // where single precision missed its edge), only the unshaped lights.
-        clipped_.assign(unshaped.begin(), unshaped.end());
-        if (sampled) add_if_missing(clipped_, sampled_light);
-    } else if (sampled ? !hidden(context_.scene.lights()[sampled_light], sampled_distance) ||
-                                context_.scene.geometry().mesh(blocker->mesh).is_emissive()
-                          : !blocker || context_.scene.geometry().mesh(blocker->mesh).is_emissive()) {
-        along = &along_.of(x, w);
-    } else {
-        // Hidden: no light past the blocker is seen, at most
-        // blocker->t / (1 − tolerance) + offset from x. The emitter shapes'
-        // distances are single precision: a margin far above their rounding
-        // (relative to the coordinates' size) keeps every such light listed.
-        const double reach = blocker->t / (1 - kEmitterDepthTolerance) + offset;
-        const double scale = std::max({std::abs(x.x), std::abs(x.y), std::abs(x.z), reach});
-        clipped_.clear();
-        context_.scene.emitter_shapes().lights_along(x, w, clipped_, reach * (1 + 1e-4) + 1e-5 * scale);
-        // Unshaped lights (a world, a sun's disk, a point light's) are listed
-        // by no shape: `hidden` below judges them by their distance.
-        clipped_.insert(clipped_.end(), unshaped.begin(), unshaped.end());
-        // As lights_along(): the drawn light surely lies along w.
-        if (sampled) add_if_missing(clipped_, sampled_light);
-    }
+    const std::vector<std::uint32_t>& along_w =
+        lights_to_blocker(x, w, blocker, complete, offset, sampled_light, sampled_distance);
+    const std::vector<std::uint32_t>* along = &along_w;
     // The triangles' hit tests kept for their densities (Along::tests).
     TriangleTest* tests = along_.is_list(along) ? along_.begin_tests() : nullptr;
     for (std::size_t i = 0; i < along->size(); ++i) {

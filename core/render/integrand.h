@@ -110,6 +110,11 @@ private:
     // f times the receiver's closure (Lambert: cosθ/π), as Cycles' Diffuse
     // bake sees it.
     void scale_by_closure(Value& f, double cos_theta) const;
+    const std::vector<std::uint32_t>& lights_to_blocker(const Vec3& x, const Vec3& w,
+                                                        const std::optional<RayHit>& blocker,
+                                                        bool complete, double offset,
+                                                        std::uint32_t sampled_light,
+                                                        double sampled_distance);
     // GeometryScene::ListedLight: light l's record and its tree pmf's.
     static void prefetch_listed(void* self, std::uint32_t l);
 
