@@ -12,5 +12,5 @@ for flags in "" "--texels" "--per-triangle" "--general" "--texels --per-triangle
     echo "emitters $flags"
     # shellcheck disable=SC2086
     "$bench/omis_bench_emitters" --quick --reps 1 $flags |
-        awk 'NR > 2 { for (i = 1; i <= NF; i++) if ($i ~ /^[0-9a-f]{16}$/) h = $i; print h, $1, $2, $3 }'
+        awk 'NR > 2 { for (i = 1; i <= NF; i++) if (length($i) == 16 && $i ~ /^[0-9a-f]+$/) h = $i; print h, $1, $2, $3 }'
 done
