@@ -20,6 +20,7 @@
 #include "bake/uv_raster.h"
 #include "bake/vertex_points.h"
 #include "mis/allocation.h"
+#include "render/progress_throttle.h"
 #include "scene/surface_contacts.h"
 
 namespace omis {
@@ -392,7 +393,7 @@ private:
     double total_work_ = 1;
     std::atomic<std::size_t> shaded_{0};
     std::atomic<bool> cancel_{false};
-    std::atomic<double> last_report_{0};
+    ProgressThrottle report_throttle_;  // keep_going's progress reports
     std::mutex report_;
 
     // The pass schedule.
@@ -532,14 +533,10 @@ void Baker::report_progress() {
     if (lock.owns_lock() && !progress_(std::min(1.0, fraction))) cancel_ = true;
 }
 
-// Inside a point with huge counts: the cancel check, and progress at most
-// every 50 ms (time budgets end on whole passes, never inside a point).
+// Inside a point with huge counts: the cancel check, and progress now and
+// then (ProgressThrottle; time budgets end on whole passes, never inside a point).
 bool Baker::keep_going() {
-    const double now = elapsed();
-    if (progress_ && now - last_report_.load(std::memory_order_relaxed) >= 0.05) {
-        last_report_ = now;
-        report_progress();
-    }
+    if (progress_ && report_throttle_.due(elapsed())) report_progress();
     return !cancel_.load(std::memory_order_relaxed);
 }
 

@@ -21,7 +21,7 @@ constexpr int kLightTypes = 8;  // how many LightType values
 const char* light_type_name(LightType type);
 
 // How a light technique draws a direction toward the light it has chosen — the
-// light's shape (SPEC §3); choosing the light is LightSelection's part.
+// light's shape (SPEC §3); choosing the light is SelectionRule's part.
 // ProjectedSolidAngle draws ∝ cos θ on rects and triangles; other shapes use their
 // solid-angle sampler under that name.
 enum class ShapeSampler { Area, SolidAngle, Parallel, ProjectedSolidAngle };
@@ -123,7 +123,7 @@ struct Emitted {
     double distance = 0;
 };
 // Mesh lights emit through their mesh's triangles: the first hit along w
-// decides (direct_lighting.cpp); here they give none.
+// decides (render/integrand.cpp); here they give none.
 std::optional<Emitted> emitted_radiance(const Light& light, const Vec3& x, const Vec3& w);
 // The same for a triangle light whose shape w meets at `distance` (its
 // intersect's t): a caller that first tests the hit (against a blocker) forms

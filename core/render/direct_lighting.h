@@ -105,7 +105,7 @@ public:
     std::vector<std::uint32_t> integrated, delta;
     const std::vector<double>& power;  // per light, for `power` selection (the scene's)
     // Per light, what tells whether a rect or triangle is tiny in solid angle
-    // at x (then sampled by area for `solid-angle`; direct_lighting.cpp);
+    // at x (then sampled by area for `solid-angle`; shape_draws.h);
     // empty among many lights, where each light's is made from the light.
     struct TinyShape {
         Vec3 centroid;
@@ -121,16 +121,16 @@ public:
     const LightSelector* power_selector = nullptr;
     const LightSelector* tree_selector = nullptr;
     const LightSelector* delta_selector = nullptr;
-    const LightSelector* selector(LightSelection selection) const;
-    // Per texel (PointLighting::shade's stream), what a bake's later passes
+    const LightSelector* selector(SelectionRule selection) const;
+    // Per texel (PointLighting::shade's point id), what a bake's later passes
     // reuse: the techniques taking part and their light tables.
     mutable TexelTables texel_tables;
     // Whether shading keeps anything there: not when every light technique's
     // table needs no irradiance (`uniform`, `power`: cheaper to make again
-    // at every pass than to keep; direct_lighting.cpp). A bake then need not
+    // at every pass than to keep; point_setup.cpp). A bake then need not
     // index its points in texel_tables.
     bool keeps_texel_tables = true;
-    // Per point (PointLighting::shade's stream), where its table draws stand
+    // Per point (PointLighting::shade's point id), where its table draws stand
     // (render/texel_draws.h), so that a later call continues from there:
     // kept by a job that shades points 0 … points − 1 in several passes
     // (keep_draw_counts). 4 bytes per point, light technique that draws from
@@ -268,10 +268,10 @@ public:
     // first_round. The variance comes from the spread between the streams'
     // estimates when at least two hold rounds, else from the estimator's own
     // (independent-draw) formula.
-    // stream names the point within the context: with a footprint, or from
+    // point names the point within the context: with a footprint, or from
     // its second call on (first_round > 0), the point's techniques and light
     // tables are kept under it (LightingContext::texel_tables) and reused, so
-    // one stream must always mean the same point and footprint.
+    // one point id must always mean the same point and footprint.
     // footprint: null = every sample at `centre`; else each sample draws its
     // own position from it (delta lights then take one position per round).
     // counts: samples per technique in each of these rounds (null = the
@@ -285,13 +285,13 @@ public:
     // earlier: every call before this one for the same point, in order, when
     // their counts were not all the settings' (their rounds must add up to
     // first_round; std::invalid_argument otherwise).
-    void shade(std::uint64_t stream, int first_round, int rounds, const SurfacePoint& centre,
+    void shade(std::uint64_t point, int first_round, int rounds, const SurfacePoint& centre,
                const Footprint* footprint, double value[3], double variance[3],
                const int* counts = nullptr, double own_variance[3] = nullptr,
                StreamEstimates* streams = nullptr,
                const std::vector<DrawnRounds>* earlier = nullptr);
     // A fixed point x with shading normal n and geometric normal ng.
-    void shade(std::uint64_t stream, int first_round, int rounds, const Vec3& x, const Vec3& n,
+    void shade(std::uint64_t point, int first_round, int rounds, const Vec3& x, const Vec3& n,
                const Vec3& ng, double value[3], double variance[3]);
 
     // While set, every sample of the points shaded goes to `pilot` too (its

@@ -119,7 +119,7 @@ bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techni
     for (std::size_t k = 0; k < techniques.size(); ++k) {
         if (k < samples.size() && samples[k] <= 0) continue;
         if (techniques[k].bsdf) bsdf = true;
-        else if (techniques[k].selection == LightSelection::Tree) return false;
+        else if (techniques[k].selection == SelectionRule::Tree) return false;
     }
     return bsdf;
 }
@@ -259,12 +259,12 @@ EffectPlan plan_effects(const Scene& scene, const std::vector<Technique>& techni
         else if (!t.bsdf && t.sampler == ShapeSampler::Parallel && !any_projectable)
             why = "no light with a planar region to project";
         plan.enabled.push_back(why.empty());
-        if (why.empty() && !t.bsdf && t.selection == LightSelection::Tree)
+        if (why.empty() && !t.bsdf && t.selection == SelectionRule::Tree)
             why = "applies (light tree: O(log L) selection over " +
                   std::to_string(plan.integrated_lights) + " light(s))";
         else if (why.empty() && !t.bsdf &&
-                 (t.selection == LightSelection::Unoccluded ||
-                  t.selection == LightSelection::Defensive) &&
+                 (t.selection == SelectionRule::Unoccluded ||
+                  t.selection == SelectionRule::Defensive) &&
                  plan.integrated_lights > kManyIntegratedLights)
             why = "applies (exact per-light weights: cost grows with the " +
                   std::to_string(plan.integrated_lights) + " lights; `tree` does not)";
@@ -312,27 +312,43 @@ std::string EffectPlan::to_string() const {
     return s.str();
 }
 
-void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
-                        std::vector<int>& samples, int* shadowed_draws) {
-    techniques.clear();
-    samples.clear();
-    if (shadowed_draws) *shadowed_draws = 1;
-    int integrated = 0;
+namespace {
+
+// What default_techniques reads from the scene's integrated lights.
+struct IntegratedLights {
+    int count = 0;
     bool world = false, huge = false;
+};
+
+IntegratedLights integrated_lights(const Scene& scene) {
+    IntegratedLights s;
     for (const Light& l : scene.lights()) {
         if (l.is_delta()) continue;
-        ++integrated;
-        world = world || l.type == LightType::World;
+        ++s.count;
+        s.world = s.world || l.type == LightType::World;
         // A light as wide as the scene covers much of the hemisphere of points
         // near it and crosses their horizon; uniform solid angle then spends its
         // draws where cos θ is small. Measured on disks 5 cm and 1 m under
         // lights 1 m and 60 m wide (16 rounds, optimal weights): adding `bsdf`
         // cut the per-point standard deviation 3× and 11×.
-        huge = huge || planar_extent(l) >= scene.bounding_radius();
+        s.huge = s.huge || planar_extent(l) >= scene.bounding_radius();
     }
     // An emissive mesh is huge as a whole where its triangles are not.
     for (const Mesh& mesh : scene.geometry().meshes())
-        if (mesh.is_emissive()) huge = huge || mesh_extent(mesh) >= scene.bounding_radius();
+        if (mesh.is_emissive()) s.huge = s.huge || mesh_extent(mesh) >= scene.bounding_radius();
+    return s;
+}
+
+}  // namespace
+
+void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
+                        std::vector<int>& samples, int* shadowed_draws) {
+    techniques.clear();
+    samples.clear();
+    if (shadowed_draws) *shadowed_draws = 1;
+    const IntegratedLights lights = integrated_lights(scene);
+    const int integrated = lights.count;
+    const bool world = lights.world, huge = lights.huge;
     auto add = [&](const char* name, int count) {
         techniques.push_back(*parse_technique(name));
         samples.push_back(count);
@@ -394,7 +410,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
         // One sequence of N samples instead of a pair's two of N/2: see
         // bench_cycles' error per sample (README, issue 9). With a world in
         // the selection the uniform part is a tenth, not half (its cosine
-        // draws are the noisy ones: direct_lighting.cpp, mix_in_uniform).
+        // draws are the noisy ones: light_tables.cpp, mix_in_uniform).
         add("defensive/solid-angle", 1);
     }
     // The world left to `bsdf`; huge lights are what cosine sampling is good

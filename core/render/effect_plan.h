@@ -104,7 +104,7 @@ constexpr int kFewWorldOccluders = 4;
 // count (DirectLightingSettings::shadowed_draws, set through `shadowed_draws`
 // when given) among several comparable local lights: those whose centre does
 // not see the middle points of lights that bring at least kShadowedShare of
-// the light there unoccluded (direct_lighting.cpp, centre_in_shadow).
+// the light there unoccluded (point_setup.cpp, centre_in_shadow).
 constexpr int kShadowedDraws = 4;
 constexpr double kShadowedShare = 0.5;
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,

@@ -192,7 +192,7 @@ void Scene::build_emitter_shapes() {
         }
     }
     // Light samples among emissive triangles trace the candidates with the
-    // meshes (direct_lighting.cpp: integrand_to_blocker).
+    // meshes (integrand.cpp: Integrand::to_blocker).
     // An emissive mesh's triangles are their own candidates there (their
     // hits name their lights): only the other shapes are added.
     if (std::any_of(geometry_.meshes().begin(), geometry_.meshes().end(),

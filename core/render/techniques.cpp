@@ -8,12 +8,12 @@ namespace {
 
 // The one table of selection and sampler names (SPEC §3); parsing, printing
 // and technique_names() all read it.
-constexpr std::pair<LightSelection, const char*> kSelections[] = {
-    {LightSelection::Uniform, "uniform"},
-    {LightSelection::Power, "power"},
-    {LightSelection::Unoccluded, "unoccluded"},
-    {LightSelection::Tree, "tree"},
-    {LightSelection::Defensive, "defensive"},
+constexpr std::pair<SelectionRule, const char*> kSelections[] = {
+    {SelectionRule::Uniform, "uniform"},
+    {SelectionRule::Power, "power"},
+    {SelectionRule::Unoccluded, "unoccluded"},
+    {SelectionRule::Tree, "tree"},
+    {SelectionRule::Defensive, "defensive"},
 };
 constexpr ShapeSampler kSamplers[] = {ShapeSampler::Area, ShapeSampler::SolidAngle,
                                       ShapeSampler::Parallel, ShapeSampler::ProjectedSolidAngle};

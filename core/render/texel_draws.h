@@ -5,7 +5,7 @@
 // Where each texel's table draws stand (TexelDrawCounts). A light technique
 // that draws from a per-texel table takes each light's shape point from that
 // light's own sequence, at the light's count of draws so far
-// (direct_lighting.cpp, LightStreams). A later pass needs those counts:
+// (technique_draws.h, LightSequences). A later pass needs those counts:
 // re-counting them from the earlier rounds' selections grew with the rounds
 // done, ~20 % of what every later pass repeated (bench/results/budgets.txt).
 // Kept here, a pass continues from them instead.

@@ -8,7 +8,7 @@
 // samples. A table kept is the one recomputation would give, bit for bit.
 // Texels whose light techniques all draw from selectors keep only which
 // techniques take part, and only in a slot of their own (index_points); bakes
-// whose tables need no irradiance (`uniform`, `power`: direct_lighting.cpp,
+// whose tables need no irradiance (`uniform`, `power`: point_setup.cpp,
 // cheap_tables_) keep nothing.
 //
 // Shared by the threads of one lighting job: a texel is shaded by one thread

@@ -267,7 +267,7 @@ TEST_CASE("the plan picks the light tree by default for many emitters", "[select
     default_techniques(m.scene, techniques, samples);
     REQUIRE(!techniques.empty());
     CHECK(techniques[0].name() == "tree/solid-angle");
-    CHECK(parse_technique("tree/area")->selection == LightSelection::Tree);
+    CHECK(parse_technique("tree/area")->selection == SelectionRule::Tree);
 }
 
 namespace {
