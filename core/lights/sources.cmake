@@ -1,1 +1,2 @@
-target_sources(omis_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/light.cpp)
+target_sources(omis_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/light.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/environment_map.cpp)
