@@ -95,7 +95,9 @@ bool comparable_local_lights(const Scene& scene, bool without_world) {
 // world_window (a skylit room, world 29× the lamp's) 1.47 → 3.37 left to bsdf.
 // Whether the world is an image (environment_map.h): never left to `bsdf`
 // alone (a small bright sun in it is what cosine draws miss), never seen as
-// a constant through emitters, and drawn beside `bsdf` by default.
+// a constant through emitters, and drawn beside `bsdf` by default (its map's
+// draws ignore the cosine and the occluders: a room lit through a window
+// wastes most of them on walls, where cosine draws find the window).
 bool image_world(const Scene& scene) {
     for (const Light& l : scene.lights())
         if (l.type == LightType::World && l.environment) return true;
@@ -422,9 +424,6 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // time, 5 alternated bakes at 96/384/1024 samples): 0.80–0.90× the
     // relMSE at equal time. Two light draws to one cosine: 2.0/2.3/2.5.
     // (Two cosine draws, ce01fcb, rested on single race runs.)
-    // An image world: its map's draws ignore the cosine and the occluders
-    // (a room lit through a window wastes most of them on walls), cosine
-    // draws miss a small sun; each covers what the other misses.
     if (!has_bsdf && (world_to_bsdf || huge || image_world(scene))) add("bsdf", 1);
 }
 
