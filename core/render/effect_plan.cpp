@@ -1,9 +1,13 @@
 #include "render/effect_plan.h"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
+
+#include "lights/environment_map.h"
 
 namespace omis {
 namespace {
@@ -322,6 +326,23 @@ std::string EffectPlan::to_string() const {
         s << ": " << why[k] << "\n";
     }
     return s.str();
+}
+
+void require_compensation_covered(const Scene& scene, const std::vector<Technique>& techniques,
+                                  const std::vector<int>& samples) {
+    for (const Light& l : scene.lights()) {
+        if (l.type != LightType::World || !l.environment ||
+            !l.environment->compensation_applied())
+            continue;
+        bool bsdf = false;
+        for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
+            bsdf = bsdf || (techniques[k].bsdf && samples[k] > 0);
+        if (!bsdf || !l.visible_to_bsdf)
+            throw std::invalid_argument(
+                "techniques: the world image is drawn with MIS compensation, which leaves "
+                "its texels below the mean to `bsdf`; add `bsdf` (with samples) and keep the "
+                "world visible to BSDF rays, or set the image without compensation");
+    }
 }
 
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,

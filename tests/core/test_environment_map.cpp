@@ -226,6 +226,13 @@ TEST_CASE("one bright texel against its closed form", "[envmap]") {
         for (const auto& [names, samples] : cases)
             for (Strategy s : {Strategy::Balance, Strategy::Power, Strategy::OptimalDirect,
                                Strategy::OptimalProgressive}) {
+                if (compensate && names.size() == 1) {
+                    // Compensation leaves the texels below the mean to `bsdf`:
+                    // without it the call is refused, not biased.
+                    CHECK_THROWS_WITH(copies(*scene, n, names, samples, s, seed++),
+                                      Catch::Matchers::Contains("MIS compensation"));
+                    continue;
+                }
                 const auto e = copies(*scene, n, names, samples, s, seed++);
                 INFO(names.size() << " technique(s), " << strategy_name(s) << ", compensate "
                                   << compensate << ": " << e.mean << " ± " << e.standard_error

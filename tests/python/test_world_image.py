@@ -144,3 +144,10 @@ def test_bad_world_images_are_refused(image, kwargs, words):
         scene.set_world_image(image, **kwargs)
     for word in words:
         assert word in str(err.value)
+
+
+def test_compensation_without_bsdf_is_refused():
+    scene = world_scene(one_texel_map(), compensate=True)
+    with pytest.raises(ValueError, match="MIS compensation"):
+        omis.direct_lighting(scene, np.zeros((1, 3)), np.array([[0.0, 0.0, 1.0]]),
+                             ["uniform/solid-angle"], [4])
