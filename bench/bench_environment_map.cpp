@@ -27,8 +27,8 @@ double seconds_since(Clock::time_point t0) {
 std::vector<float> procedural_sky(int w, int h) {
     std::vector<float> rgb(std::size_t(w) * h * 3);
     const double elevation = 40 * kPi / 180, azimuth = 30 * kPi / 180;
-    const Vec3 sun{std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
-                   std::sin(elevation)};
+    const Vec3 sun{std::cos(elevation) * std::cos(azimuth),
+                   std::cos(elevation) * std::sin(azimuth), std::sin(elevation)};
     const double cos_sun = std::cos(0.25 * kPi / 180);
     for (int r = 0; r < h; ++r)
         for (int c = 0; c < w; ++c) {
@@ -59,23 +59,27 @@ void measure(const std::vector<float>& rgb, int w, int h, bool compensate) {
     const double sample_ns = seconds_since(t0) / draws * 1e9;
     std::normal_distribution<double> g;
     t0 = Clock::now();
-    for (int i = 0; i < draws; ++i) checksum += map.pdf(normalize(Vec3(g(rng), g(rng), g(rng))));
+    for (int i = 0; i < draws; ++i)
+        checksum += map.pdf(normalize(Vec3(g(rng), g(rng), g(rng))));
     const double pdf_ns = seconds_since(t0) / draws * 1e9;
     const double image_mib = double(rgb.size() * sizeof(float)) / (1 << 20);
-    std::printf("%-12s build %.3f s  holds %.0f MiB (image %.0f MiB, distribution %.0f MiB)"
-                "  draw %.0f ns  pdf %.0f ns  (checksum %.3g)\n",
-                compensate ? "compensated" : "plain", build,
-                double(map.memory_bytes()) / (1 << 20), image_mib,
-                double(map.memory_bytes()) / (1 << 20) - image_mib, sample_ns, pdf_ns, checksum);
+    std::printf(
+        "%-12s build %.3f s  holds %.0f MiB (image %.0f MiB, distribution %.0f MiB)"
+        "  draw %.0f ns  pdf %.0f ns  (checksum %.3g)\n",
+        compensate ? "compensated" : "plain", build,
+        double(map.memory_bytes()) / (1 << 20), image_mib,
+        double(map.memory_bytes()) / (1 << 20) - image_mib, sample_ns, pdf_ns, checksum);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    const int w = argc > 2 ? std::atoi(argv[1]) : 8192, h = argc > 2 ? std::atoi(argv[2]) : 4096;
+    const int w = argc > 2 ? std::atoi(argv[1]) : 8192,
+              h = argc > 2 ? std::atoi(argv[2]) : 4096;
     const auto t0 = Clock::now();
     const std::vector<float> rgb = procedural_sky(w, h);
-    std::printf("world image %d x %d (procedural sky, made in %.2f s)\n", w, h, seconds_since(t0));
+    std::printf("world image %d x %d (procedural sky, made in %.2f s)\n", w, h,
+                seconds_since(t0));
     measure(rgb, w, h, false);
     measure(rgb, w, h, true);
     return 0;

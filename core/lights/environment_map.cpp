@@ -14,11 +14,12 @@ namespace {
 
 constexpr int kMaxSide = 1 << 16;
 
-void validate(const std::vector<float>& rgb, int width, int height, const Vec3& rotation) {
+void validate(const std::vector<float>& rgb, int width, int height,
+              const Vec3& rotation) {
     if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide)
-        throw std::invalid_argument("world image: width and height must be in 1.." +
-                                    std::to_string(kMaxSide) + ", got " + std::to_string(width) +
-                                    " x " + std::to_string(height));
+        throw std::invalid_argument(
+            "world image: width and height must be in 1.." + std::to_string(kMaxSide) +
+            ", got " + std::to_string(width) + " x " + std::to_string(height));
     if (rgb.size() != std::size_t(width) * std::size_t(height) * 3)
         throw std::invalid_argument("world image: expected width x height x 3 = " +
                                     std::to_string(std::size_t(width) * height * 3) +
@@ -29,18 +30,19 @@ void validate(const std::vector<float>& rgb, int width, int height, const Vec3& 
         const float v = rgb[i];
         if (std::isfinite(v) && v >= 0) continue;
         const std::size_t texel = i / 3;
-        const char* what = std::isnan(v) ? "NaN" : (std::isinf(v) ? "infinite" : "negative");
-        throw std::invalid_argument("world image: texel (row " + std::to_string(texel / width) +
-                                    ", column " + std::to_string(texel % width) + ", channel " +
-                                    std::to_string(i % 3) + ") is " + what +
-                                    "; radiance must be finite and non-negative");
+        const char* what =
+            std::isnan(v) ? "NaN" : (std::isinf(v) ? "infinite" : "negative");
+        throw std::invalid_argument(
+            "world image: texel (row " + std::to_string(texel / width) + ", column " +
+            std::to_string(texel % width) + ", channel " + std::to_string(i % 3) +
+            ") is " + what + "; radiance must be finite and non-negative");
     }
 }
 
 // Rows of R = Rz(z)·Ry(y)·Rx(x), Cycles' euler_to_transform.
 std::array<Vec3, 3> euler_xyz_matrix(const Vec3& e) {
-    const double cx = std::cos(e.x), sx = std::sin(e.x), cy = std::cos(e.y), sy = std::sin(e.y),
-                 cz = std::cos(e.z), sz = std::sin(e.z);
+    const double cx = std::cos(e.x), sx = std::sin(e.x), cy = std::cos(e.y),
+                 sy = std::sin(e.y), cz = std::cos(e.z), sz = std::sin(e.z);
     return {Vec3{cy * cz, sy * sx * cz - cx * sz, sy * cx * cz + sx * sz},
             Vec3{cy * sz, sy * sx * sz + cx * cz, sy * cx * sz - sx * cz},
             Vec3{-sy, cy * sx, cy * cx}};
@@ -103,7 +105,8 @@ EnvironmentMap::EnvironmentMap(std::vector<float> rgb, int width, int height,
     for (int r = 0; r < height; ++r)
         for (int c = 0; c < width; ++c) {
             float& w = weights[std::size_t(r) * width + c];
-            const double lum = compensation_applied_ ? std::max(0.0, w - mean) : double(w);
+            const double lum =
+                compensation_applied_ ? std::max(0.0, w - mean) : double(w);
             w = float(std::max(0.0, lum) * row_mean_sin[r]);
         }
     distribution_ = PiecewiseConstant2D(weights.data(), width, height);
@@ -129,7 +132,8 @@ Vec3 EnvironmentMap::from_map_point(const Point2& p, double* sin_theta) const {
 
 Vec3 EnvironmentMap::radiance(const Vec3& w) const {
     const Point2 p = to_map_point(w);
-    const int c = std::min(int(p.x * width_), width_ - 1), r = std::min(int(p.y * height_), height_ - 1);
+    const int c = std::min(int(p.x * width_), width_ - 1),
+              r = std::min(int(p.y * height_), height_ - 1);
     return texel(c, r);
 }
 
@@ -150,7 +154,9 @@ double EnvironmentMap::pdf(const Vec3& w) const {
     return distribution_.pdf(p) / (2 * kPi * kPi * sin_theta);
 }
 
-Point2 EnvironmentMap::invert(const Vec3& w) const { return distribution_.invert(to_map_point(w)); }
+Point2 EnvironmentMap::invert(const Vec3& w) const {
+    return distribution_.invert(to_map_point(w));
+}
 
 std::size_t EnvironmentMap::memory_bytes() const {
     return sizeof(*this) + rgb_.capacity() * sizeof(float) + distribution_.memory_bytes();

@@ -32,7 +32,7 @@
 namespace omis {
 
 class EnvironmentMap {
-public:
+  public:
     // rgb: width × height × 3 floats, rows top first; every value finite and
     // ≥ 0. rotation: Euler XYZ angles in radians. Throws
     // std::invalid_argument naming the first bad texel or argument.
@@ -70,7 +70,7 @@ public:
     static Point2 direction_to_equirectangular(const Vec3& d);
     static Vec3 equirectangular_to_direction(const Point2& uv);
 
-private:
+  private:
     int width_ = 0, height_ = 0;
     std::vector<float> rgb_;
     Vec3 rotation_;

@@ -21,12 +21,14 @@ int cell_of(double x, int n) { return std::min(std::max(int(x * n), 0), n - 1); 
 
 void require_weight(double w) {
     if (!(w >= 0) || !std::isfinite(w))
-        throw std::invalid_argument("distribution: weights must be finite and non-negative");
+        throw std::invalid_argument(
+            "distribution: weights must be finite and non-negative");
 }
 
 }  // namespace
 
-PiecewiseConstant1D::PiecewiseConstant1D(const double* weights, int n) : n_(n), cdf_(n + 1, 0.0) {
+PiecewiseConstant1D::PiecewiseConstant1D(const double* weights, int n)
+    : n_(n), cdf_(n + 1, 0.0) {
     if (n < 1) throw std::invalid_argument("distribution: needs at least one cell");
     for (int i = 0; i < n; ++i) {
         require_weight(weights[i]);
@@ -60,7 +62,8 @@ double PiecewiseConstant1D::invert(double x) const {
 
 PiecewiseConstant2D::PiecewiseConstant2D(const float* weights, int width, int height)
     : width_(width), height_(height) {
-    if (width < 1 || height < 1) throw std::invalid_argument("distribution: needs at least one cell");
+    if (width < 1 || height < 1)
+        throw std::invalid_argument("distribution: needs at least one cell");
     columns_.resize(std::size_t(height) * (width + 1));
     std::vector<double> row_totals(height), running(width + 1);
     for (int r = 0; r < height; ++r) {
@@ -87,12 +90,13 @@ Point2 PiecewiseConstant2D::sample(double u1, double u2, double* pdf) const {
     int row = 0;
     const double y = rows_.sample(u2, &row);
     const float* cdf = row_cdf(row);
-    const float* above = std::upper_bound(cdf, cdf + width_ + 1, u1,
-                                          [](double u, float c) { return u < double(c); });
+    const float* above = std::upper_bound(
+        cdf, cdf + width_ + 1, u1, [](double u, float c) { return u < double(c); });
     const int i = std::min(std::max(int(above - cdf) - 1, 0), width_ - 1);
     const double p = double(cdf[i + 1]) - double(cdf[i]);
     const double offset = p > 0 ? (u1 - double(cdf[i])) / p : 0.5;
-    const double x = fit_into_cell((i + std::min(std::max(offset, 0.0), 1.0)) / width_, i, width_);
+    const double x =
+        fit_into_cell((i + std::min(std::max(offset, 0.0), 1.0)) / width_, i, width_);
     if (pdf) *pdf = rows_.cell_probability(row) * p * double(width_) * double(height_);
     return {x, y};
 }
@@ -104,8 +108,8 @@ double PiecewiseConstant2D::cell_probability(int column, int row) const {
 
 double PiecewiseConstant2D::pdf(const Point2& p) const {
     if (!(p.x >= 0 && p.x < 1 && p.y >= 0 && p.y < 1)) return 0;
-    return cell_probability(cell_of(p.x, width_), cell_of(p.y, height_)) * double(width_) *
-           double(height_);
+    return cell_probability(cell_of(p.x, width_), cell_of(p.y, height_)) *
+           double(width_) * double(height_);
 }
 
 Point2 PiecewiseConstant2D::invert(const Point2& p) const {
@@ -116,7 +120,8 @@ Point2 PiecewiseConstant2D::invert(const Point2& p) const {
 }
 
 std::size_t PiecewiseConstant2D::memory_bytes() const {
-    return columns_.capacity() * sizeof(float) + std::size_t(height_ + 1) * sizeof(double);
+    return columns_.capacity() * sizeof(float) +
+           std::size_t(height_ + 1) * sizeof(double);
 }
 
 }  // namespace omis

@@ -16,7 +16,7 @@ namespace omis {
 
 // Density on [0,1) constant over n equal cells. Measure: length on [0,1).
 class PiecewiseConstant1D {
-public:
+  public:
     PiecewiseConstant1D() = default;
     // weights: n >= 1 finite, non-negative values; all zero gives the uniform density.
     PiecewiseConstant1D(const double* weights, int n);
@@ -30,7 +30,7 @@ public:
     // The u that sample() maps to x (x inside a cell of positive probability).
     double invert(double x) const;
 
-private:
+  private:
     int n_ = 0;
     std::vector<double> cdf_;  // n + 1 values, 0 … 1
 };
@@ -40,7 +40,7 @@ private:
 // The rows' conditional CDFs are floats (an 8k × 4k map's weigh 128 MiB
 // instead of 256); the marginal over rows is in double.
 class PiecewiseConstant2D {
-public:
+  public:
     PiecewiseConstant2D() = default;
     // weights: width × height finite, non-negative values, row-major.
     PiecewiseConstant2D(const float* weights, int width, int height);
@@ -57,11 +57,13 @@ public:
     Point2 invert(const Point2& p) const;
     std::size_t memory_bytes() const;
 
-private:
+  private:
     int width_ = 0, height_ = 0;
-    PiecewiseConstant1D rows_;   // marginal over rows
+    PiecewiseConstant1D rows_;    // marginal over rows
     std::vector<float> columns_;  // per row: width + 1 CDF values, 0 … 1
-    const float* row_cdf(int row) const { return columns_.data() + std::size_t(row) * (width_ + 1); }
+    const float* row_cdf(int row) const {
+        return columns_.data() + std::size_t(row) * (width_ + 1);
+    }
 };
 
 }  // namespace omis

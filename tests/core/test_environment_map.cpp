@@ -5,7 +5,6 @@
 // standard errors measured from the copies (a 6e-5 miss for a normal mean;
 // fixed seeds make a pass reproducible).
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <memory>
 #include <random>
@@ -29,7 +28,8 @@ constexpr int kCopies = 64;
 
 std::vector<float> constant_rgb(int w, int h, const Vec3& c) {
     std::vector<float> rgb;
-    for (int i = 0; i < w * h; ++i) rgb.insert(rgb.end(), {float(c.x), float(c.y), float(c.z)});
+    for (int i = 0; i < w * h; ++i)
+        rgb.insert(rgb.end(), {float(c.x), float(c.y), float(c.z)});
     return rgb;
 }
 
@@ -48,7 +48,8 @@ std::pair<int, int> texel_of(const Vec3& d, int w, int h) {
     double u = (std::atan2(d.y, d.x) - kPi) / (-2 * kPi);
     const double v = (std::acos(std::max(-1.0, std::min(1.0, d.z))) - kPi) / (-kPi);
     if (u >= 1) u -= 1;
-    const int column = std::min(int(u * w), w - 1), row = std::min(int((1 - v) * h), h - 1);
+    const int column = std::min(int(u * w), w - 1),
+              row = std::min(int((1 - v) * h), h - 1);
     return {column, row};
 }
 
@@ -64,16 +65,18 @@ std::unique_ptr<Scene> world_scene(const Light& world) {
 }
 
 testing::PointCopies copies(const Scene& scene, const Vec3& n,
-                            const std::vector<std::string>& names, const std::vector<int>& samples,
-                            Strategy strategy, std::uint64_t seed) {
+                            const std::vector<std::string>& names,
+                            const std::vector<int>& samples, Strategy strategy,
+                            std::uint64_t seed) {
     return testing::light_point_copies(
-        scene, Vec3(0, 0, 0), n, testing::lighting_settings(names, samples, 1, strategy, seed),
-        kCopies);
+        scene, Vec3(0, 0, 0), n,
+        testing::lighting_settings(names, samples, 1, strategy, seed), kCopies);
 }
 
 }  // namespace
 
-TEST_CASE("equirectangular convention: Cycles' direction_to_equirectangular", "[envmap]") {
+TEST_CASE("equirectangular convention: Cycles' direction_to_equirectangular",
+          "[envmap]") {
     using M = EnvironmentMap;
     // +X is the image's centre, u grows toward −Y, v = 1 at the zenith.
     CHECK(M::direction_to_equirectangular({1, 0, 0}).x == Approx(0.5));
@@ -87,12 +90,14 @@ TEST_CASE("equirectangular convention: Cycles' direction_to_equirectangular", "[
     std::normal_distribution<double> g;
     for (int i = 0; i < 1000; ++i) {
         const Vec3 d = normalize(Vec3(g(rng), g(rng), g(rng)));
-        const Vec3 back = M::equirectangular_to_direction(M::direction_to_equirectangular(d));
+        const Vec3 back =
+            M::equirectangular_to_direction(M::direction_to_equirectangular(d));
         CHECK(length(back - d) < 1e-12);
     }
 }
 
-TEST_CASE("world image rotation: the Mapping node's Euler XYZ turns the lookup", "[envmap]") {
+TEST_CASE("world image rotation: the Mapping node's Euler XYZ turns the lookup",
+          "[envmap]") {
     const int w = 16, h = 8;
     const std::vector<float> rgb = random_rgb(w, h, 3);
     auto at = [&](int column, int row) {
@@ -113,9 +118,12 @@ TEST_CASE("world image rotation: the Mapping node's Euler XYZ turns the lookup",
     for (int i = 0; i < 200; ++i) {
         const Vec3 d = normalize(Vec3(g(rng), g(rng), g(rng)));
         Vec3 v = d;
-        v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z, std::sin(e.x) * v.y + std::cos(e.x) * v.z};
-        v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y, -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
-        v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y, std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
+        v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z,
+             std::sin(e.x) * v.y + std::cos(e.x) * v.z};
+        v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y,
+             -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
+        v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y,
+             std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
         const auto [col, row] = texel_of(v, w, h);
         CHECK(length(rotated.radiance(d) - at(col, row)) == 0);
     }
@@ -139,7 +147,8 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
             for (int i = 0; i < w * h; ++i) {
                 const int row = i / w;
                 const double l = compensate ? std::max(0.0, lum[i] - mean) : lum[i];
-                const double band = std::cos(kPi * row / h) - std::cos(kPi * (row + 1) / h);
+                const double band =
+                    std::cos(kPi * row / h) - std::cos(kPi * (row + 1) / h);
                 prob[i] = l * band / (kPi / h);
                 total += prob[i];
                 if (l > 0) measure += texel_solid_angle(row, w, h);
@@ -150,11 +159,15 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
                 for (int k = 0; k < 3; ++k) {
                     // Columns of R from the lookups of the axes are not
                     // exposed; rotate by the same Euler product as above.
-                    Vec3 v = k == 0 ? Vec3(1, 0, 0) : (k == 1 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+                    Vec3 v =
+                        k == 0 ? Vec3(1, 0, 0) : (k == 1 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
                     const Vec3 e = rotation;
-                    v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z, std::sin(e.x) * v.y + std::cos(e.x) * v.z};
-                    v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y, -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
-                    v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y, std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
+                    v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z,
+                         std::sin(e.x) * v.y + std::cos(e.x) * v.z};
+                    v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y,
+                         -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
+                    v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y,
+                         std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
                     m[k] = v;  // R·axis_k
                 }
                 return m;
@@ -163,7 +176,9 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
             t.name = std::string("world image") + (compensate ? ", compensated" : "");
             t.sample = [&](double u1, double u2) { return map.sample(u1, u2); };
             t.pdf = [&](const Vec3& d) { return map.pdf(d); };
-            t.invert = [&](const Vec3& d) { return std::optional<Point2>(map.invert(d)); };
+            t.invert = [&](const Vec3& d) {
+                return std::optional<Point2>(map.invert(d));
+            };
             t.bin = [&](const Vec3& d) {
                 const Vec3 m = to_map[0] * d.x + to_map[1] * d.y + to_map[2] * d.z;
                 const auto [c, r] = texel_of(m, w, h);
@@ -171,7 +186,7 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
             };
             t.cell_prob = prob;
             t.measure = measure;
-            t.invert_tol = 1e-5;  // float CDFs
+            t.invert_tol = 1e-5;    // float CDFs
             t.finite_dist = false;  // a world is infinitely far
             testing::run_sampler_check(t, seed++);
         }
@@ -179,8 +194,8 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
 
 TEST_CASE("a constant map is the constant world", "[envmap]") {
     const Vec3 c(0.75, 1.5, 0.25);  // exact in float, as the map stores them
-    auto map = std::make_shared<EnvironmentMap>(constant_rgb(64, 32, c), 64, 32, Vec3(0.2, 0.5, 1),
-                                                true);
+    auto map = std::make_shared<EnvironmentMap>(constant_rgb(64, 32, c), 64, 32,
+                                                Vec3(0.2, 0.5, 1), true);
     CHECK(!map->compensation_applied());  // nothing above the mean
     const Light image = make_environment_light(map), constant = make_world_light(c);
     CHECK(length(image.emission - c) <= 1e-12 * length(c));
@@ -194,7 +209,8 @@ TEST_CASE("a constant map is the constant world", "[envmap]") {
     CHECK(a.mean == Approx(c.y).epsilon(1e-12));
     // The map's own draws (with cosine draws beside them) are unbiased.
     for (Strategy s : {Strategy::Balance, Strategy::OptimalDirect}) {
-        const auto e = copies(*image_scene, n, {"uniform/solid-angle", "bsdf"}, {8, 8}, s, 11);
+        const auto e =
+            copies(*image_scene, n, {"uniform/solid-angle", "bsdf"}, {8, 8}, s, 11);
         INFO(strategy_name(s) << ": " << e.mean << " ± " << e.standard_error);
         CHECK(e.finite);
         CHECK(std::abs(e.mean - c.y) <= kSigmas * e.standard_error + 1e-12 * c.y);
@@ -224,8 +240,8 @@ TEST_CASE("one bright texel against its closed form", "[envmap]") {
         const std::pair<std::vector<std::string>, std::vector<int>> cases[] = {
             {{"uniform/solid-angle"}, {32}}, {{"uniform/solid-angle", "bsdf"}, {16, 16}}};
         for (const auto& [names, samples] : cases)
-            for (Strategy s : {Strategy::Balance, Strategy::Power, Strategy::OptimalDirect,
-                               Strategy::OptimalProgressive}) {
+            for (Strategy s : {Strategy::Balance, Strategy::Power,
+                               Strategy::OptimalDirect, Strategy::OptimalProgressive}) {
                 if (compensate && names.size() == 1) {
                     // Compensation leaves the texels below the mean to `bsdf`:
                     // without it the call is refused, not biased.
@@ -234,11 +250,12 @@ TEST_CASE("one bright texel against its closed form", "[envmap]") {
                     continue;
                 }
                 const auto e = copies(*scene, n, names, samples, s, seed++);
-                INFO(names.size() << " technique(s), " << strategy_name(s) << ", compensate "
-                                  << compensate << ": " << e.mean << " ± " << e.standard_error
-                                  << ", exact " << exact);
+                INFO(names.size() << " technique(s), " << strategy_name(s)
+                                  << ", compensate " << compensate << ": " << e.mean
+                                  << " ± " << e.standard_error << ", exact " << exact);
                 CHECK(e.finite);
-                CHECK(std::abs(e.mean - exact) <= kSigmas * e.standard_error + 1e-9 * exact);
+                CHECK(std::abs(e.mean - exact) <=
+                      kSigmas * e.standard_error + 1e-9 * exact);
             }
     }
 }
@@ -251,7 +268,8 @@ TEST_CASE("world image: bad input is refused with a clear message", "[envmap]") 
     std::vector<float> rgb = constant_rgb(4, 2, Vec3(1, 1, 1));
     CHECK_THROWS_WITH(make(rgb, 4, 3), Contains("expected width x height x 3"));
     CHECK_THROWS_WITH(make(rgb, 0, 2), Contains("width and height"));
-    CHECK_THROWS_WITH(make(rgb, 4, 2, Vec3(0, NAN, 0)), Contains("rotation must be finite"));
+    CHECK_THROWS_WITH(make(rgb, 4, 2, Vec3(0, NAN, 0)),
+                      Contains("rotation must be finite"));
     rgb[3 * 5 + 1] = NAN;
     CHECK_THROWS_WITH(make(rgb, 4, 2), Contains("row 1, column 1, channel 1) is NaN"));
     rgb[3 * 5 + 1] = -1;
