@@ -129,6 +129,14 @@ normals; uvs: optional (3T, 2) per-corner UVs; emission: optional RGB radiance
         .def("set_world", &Scene::set_world, py::arg("radiance"),
              "Constant background radiance from every direction (replaces an earlier one). "
              "Returns the light id.")
+        .def("set_world_image", &Scene::set_world_image, py::arg("image"),
+             py::arg("rotation") = py::make_tuple(0.0, 0.0, 0.0), py::arg("compensate") = false,
+             "Image-based world (replaces an earlier world): an equirectangular RGB radiance "
+             "map, a (H, W, 3) float array with rows top first or a path to an image "
+             "OpenImageIO reads (EXR, HDR), in Cycles' convention (the image's centre looks "
+             "along +X, the top row is the zenith). rotation: Euler XYZ in radians as "
+             "Blender's Mapping node. compensate: draw from max(0, map - mean) (MIS "
+             "compensation). Returns the light id.")
         .def("set_light_flags", &Scene::set_light_flags, py::arg("light"),
              py::arg("cast_shadow") = true, py::arg("visible_to_bsdf") = true,
              "Blender's cycles.cast_shadow and use_multiple_importance_sampling for one light.")

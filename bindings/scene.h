@@ -182,6 +182,33 @@ public:
         return checked_id(omisSetWorld(get(), L.data()));
     }
 
+    // An equirectangular world from a (H, W, 3) float array (rows top first,
+    // Cycles' convention) or a path OpenImageIO reads; rotation: Euler XYZ
+    // as Blender's Mapping node.
+    unsigned int set_world_image(const py::handle& image, const py::handle& rotation_in,
+                                 const py::handle& compensate_in) {
+        const Triple rotation = triple(rotation_in, "rotation");
+        const bool compensate = bool_arg(compensate_in, "compensate");
+        if (py::isinstance<py::str>(image) || py::hasattr(image, "__fspath__")) {
+            const std::string path = py::str(py::module_::import("os").attr("fspath")(image));
+            return checked_id(omisSetWorldImageFile(get(), path.c_str(), rotation.data(), compensate));
+        }
+        py::array a = py::array::ensure(image);
+        if (!a) bad("image", "expected a (H, W, 3) float array or a path, got " + type_name(image));
+        if (a.dtype().kind() != 'f')
+            bad("image", "expected a float array, got dtype " + std::string(py::str(a.dtype())));
+        if (a.ndim() != 3 || a.shape(2) != 3 || a.shape(0) < 1 || a.shape(1) < 1)
+            bad("image", "expected shape (H, W, 3), got " + shape_of(a));
+        auto f = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(a);
+        const std::size_t height = std::size_t(a.shape(0)), width = std::size_t(a.shape(1));
+        unsigned int id = OMIS_INVALID_ID;
+        {
+            py::gil_scoped_release release;  // an 8k map takes seconds to build
+            id = omisSetWorldImage(get(), f.data(), width, height, 0, rotation.data(), compensate);
+        }
+        return checked_id(id);
+    }
+
     void set_light_flags(long long light, bool cast_shadow, bool visible_to_bsdf) {
         if (light < 0 || light >= (long long)OMIS_INVALID_ID)
             bad("light", "no light with id " + std::to_string(light));

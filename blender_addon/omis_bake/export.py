@@ -834,15 +834,11 @@ class _Exporter:
                 node, _ = _linked_from(node.inputs[0])
             if node is None or node.mute:
                 return
-            if node.type != 'BACKGROUND':
-                self.warn(f'world "{world.name}": only a constant Background is supported '
-                          f'({node.name} is ignored)')
+            if (node.type != 'BACKGROUND' or node.inputs['Color'].is_linked
+                    or node.inputs['Strength'].is_linked):
+                self.add_world_image(world)  # textures, skies, mixed backgrounds
                 return
             color_in, strength_in = node.inputs['Color'], node.inputs['Strength']
-            if color_in.is_linked or strength_in.is_linked:
-                self.warn(f'world "{world.name}": a textured background is not supported '
-                          f'(the world is ignored)')
-                return
             color, strength = _socket_value(color_in)[:3], _socket_value(strength_in)
         radiance = self.units.world_background(color, strength)
         if max(radiance) <= 0:
@@ -850,6 +846,17 @@ class _Exporter:
         lid = self.scene.set_world(radiance)
         self.counts["world"] = True
         self._record("world", lid, radiance=radiance)
+
+    def add_world_image(self, world):
+        """A world that is not one constant Background, as Cycles evaluates it
+        (world_map.py: rendered into an equirectangular map, cached)."""
+        from . import world_map  # imports bpy
+        rgb = world_map.world_map(world)
+        if not rgb.any():
+            return
+        lid = self.scene.set_world_image(rgb)
+        self.counts["world"] = True
+        self._record("world", lid, image_shape=rgb.shape)
 
     # -- the whole scene --
 

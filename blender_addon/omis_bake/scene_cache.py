@@ -22,6 +22,7 @@ import numpy as np
 _BUILDERS = frozenset({
     "add_mesh", "set_receiver", "add_point_light", "add_spot_light", "add_sun_light",
     "add_rect_light", "add_ellipse_light", "add_disk_light", "set_light_flags", "set_world",
+    "set_world_image",
     "set_mesh_lights",
 })
 

@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "lights/environment_map.h"  // image-based world
 #include "lights/spread.h"
 #include "sampling/irradiance.h"
 #include "scene/ray_offset.h"
@@ -266,7 +267,8 @@ std::optional<Emitted> emitted_radiance(const Light& l, const Vec3& x, const Vec
             const double c = std::max(dot(w, l.to_sun), 1e-12);
             return Emitted{l.emission / (kPi * tan_a * tan_a * c * c * c), kInf};
         }
-        case LightType::World: return Emitted{l.emission, kInf};
+        case LightType::World:  // image-based world: environment_map.h
+            return Emitted{l.environment ? l.environment->radiance(w) : l.emission, kInf};
         case LightType::Mesh: return std::nullopt;  // its triangles' hits emit
     }
     return std::nullopt;
@@ -410,7 +412,9 @@ std::optional<LightSample> sample_light(const Light& l, ShapeSampler sampler, co
         case LightType::Sun:
             if (l.sun_half_angle <= 0) return std::nullopt;
             return sun_of(l).sample_solid_angle(u1, u2);
-        case LightType::World: return sample_cosine_about(n, u1, u2);
+        case LightType::World:  // image-based world: environment_map.h
+            if (l.environment) return l.environment->sample(u1, u2);
+            return sample_cosine_about(n, u1, u2);
         case LightType::Mesh: {
             // Every sampler: directions toward the bounding sphere, uniform in
             // solid angle; the first hit along one decides what it sees.
@@ -463,7 +467,9 @@ double light_pdf(const Light& l, ShapeSampler sampler, const Vec3& x, const Vec3
         }
         case LightType::Sun:
             return l.sun_half_angle > 0 ? sun_of(l).pdf_solid_angle(w) : 0;
-        case LightType::World: return std::max(0.0, dot(n, w)) * kInvPi;
+        case LightType::World:  // image-based world: environment_map.h
+            if (l.environment) return l.environment->pdf(w);
+            return std::max(0.0, dot(n, w)) * kInvPi;
         case LightType::Mesh: {
             if (!mesh_light_draws_cone(l, x)) return std::max(0.0, dot(n, w)) * kInvPi;
             const Cone c = Cone::around_sphere(x, l.position, l.radius);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -12,6 +13,8 @@
 #include "sampling/shapes.h"
 
 namespace omis {
+
+class EnvironmentMap;  // lights/environment_map.h: an image-based world
 
 // Mesh: an emissive mesh drawn as one light (Scene::commit groups compact
 // meshes): directions toward its bounding sphere, its radiance where the
@@ -67,6 +70,10 @@ struct alignas(64) Light {
 
     Vec3 to_sun;             // Sun: unit direction toward the sun
     double sun_half_angle = 0;
+
+    // World: an image-based world (environment_map.h), else the constant
+    // `emission`; with a map, `emission` holds its mean radiance.
+    std::shared_ptr<const EnvironmentMap> environment;
 
     // Lights integrated by one deterministic shadow ray, outside MIS.
     bool is_delta() const;

@@ -1,9 +1,13 @@
 #include "render/effect_plan.h"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
+
+#include "lights/environment_map.h"
 
 namespace omis {
 namespace {
@@ -93,7 +97,19 @@ bool comparable_local_lights(const Scene& scene, bool without_world) {
 // against Cycles (bench_cycles --equal-samples, 128², optimal, relMSE ratio):
 // emission_world (world 0.34× the emitter's power) 1.72 → 1.45 left to bsdf;
 // world_window (a skylit room, world 29× the lamp's) 1.47 → 3.37 left to bsdf.
+// Whether the world is an image (environment_map.h): never left to `bsdf`
+// alone (a small bright sun in it is what cosine draws miss), never seen as
+// a constant through emitters, and drawn beside `bsdf` by default (its map's
+// draws ignore the cosine and the occluders: a room lit through a window
+// wastes most of them on walls, where cosine draws find the window).
+bool image_world(const Scene& scene) {
+    for (const Light& l : scene.lights())
+        if (l.type == LightType::World && l.environment) return true;
+    return false;
+}
+
 bool minor_world(const Scene& scene) {
+    if (image_world(scene)) return false;
     int integrated = 0;
     double world = -1, others = 0;
     for (std::size_t i = 0; i < scene.lights().size(); ++i) {
@@ -135,7 +151,7 @@ bool world_left_to_bsdf(const Scene& scene, const std::vector<Technique>& techni
 // 4 seeds): the world's part alone, 32 cosine draws, relMSE 2.6e-4 with the
 // quad and the box as occluders, 1.5e-4 with the box alone.
 bool world_seen_through_emitters(const Scene& scene) {
-    if (!scene.geometry().has_occluders()) return false;
+    if (!scene.geometry().has_occluders() || image_world(scene)) return false;
     const Light* world = nullptr;
     for (const Light& l : scene.lights())
         if (l.type == LightType::World) world = &l;
@@ -312,6 +328,23 @@ std::string EffectPlan::to_string() const {
     return s.str();
 }
 
+void require_compensation_covered(const Scene& scene, const std::vector<Technique>& techniques,
+                                  const std::vector<int>& samples) {
+    for (const Light& l : scene.lights()) {
+        if (l.type != LightType::World || !l.environment ||
+            !l.environment->compensation_applied())
+            continue;
+        bool bsdf = false;
+        for (std::size_t k = 0; k < techniques.size() && k < samples.size(); ++k)
+            bsdf = bsdf || (techniques[k].bsdf && samples[k] > 0);
+        if (!bsdf || !l.visible_to_bsdf)
+            throw std::invalid_argument(
+                "techniques: the world image is drawn with MIS compensation, which leaves "
+                "its texels below the mean to `bsdf`; add `bsdf` (with samples) and keep the "
+                "world visible to BSDF rays, or set the image without compensation");
+    }
+}
+
 namespace {
 
 // What default_techniques reads from the scene's integrated lights.
@@ -428,7 +461,7 @@ void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
     // time, 5 alternated bakes at 96/384/1024 samples): 0.80–0.90× the
     // relMSE at equal time. Two light draws to one cosine: 2.0/2.3/2.5.
     // (Two cosine draws, ce01fcb, rested on single race runs.)
-    if (!has_bsdf && (world_to_bsdf || huge)) add("bsdf", 1);
+    if (!has_bsdf && (world_to_bsdf || huge || image_world(scene))) add("bsdf", 1);
 }
 
 }  // namespace omis

@@ -107,6 +107,13 @@ constexpr int kFewWorldOccluders = 4;
 // the light there unoccluded (point_setup.cpp, centre_in_shadow).
 constexpr int kShadowedDraws = 4;
 constexpr double kShadowedShare = 0.5;
+// A world image drawn with MIS compensation (environment_map.h) gives the
+// texels below its mean no density: `bsdf` must be among the techniques
+// (with samples) and see the world, or the estimate would lose them. Throws
+// std::invalid_argument saying so.
+void require_compensation_covered(const Scene& scene, const std::vector<Technique>& techniques,
+                                  const std::vector<int>& samples);
+
 void default_techniques(const Scene& scene, std::vector<Technique>& techniques,
                         std::vector<int>& samples, int* shadowed_draws = nullptr);
 

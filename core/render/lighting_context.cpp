@@ -39,6 +39,8 @@ void validate(const Scene& scene, const DirectLightingSettings& s) {
             if (s.techniques[i] == s.techniques[j])
                 throw std::invalid_argument("techniques: '" + s.techniques[i].name() +
                                             "' is listed twice");
+    // Image-based world: a compensated map needs `bsdf` (effect_plan.h).
+    require_compensation_covered(scene, s.techniques, s.samples);
 }
 
 }  // namespace

@@ -7,4 +7,5 @@ target_sources(omis_core PRIVATE
     ${CMAKE_CURRENT_LIST_DIR}/projected.cpp
     ${CMAKE_CURRENT_LIST_DIR}/irradiance.cpp
     ${CMAKE_CURRENT_LIST_DIR}/sequence.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/distribution_2d.cpp
 )

@@ -14,6 +14,8 @@
 
 #include "api_common.h"
 #include "scene_impl.h"
+#include "io/image_read.h"
+#include "lights/environment_map.h"
 #include "render/effect_plan.h"
 #include "render/scene.h"
 #include "render/techniques.h"
@@ -257,6 +259,55 @@ OMIS_API unsigned int omisAddSunLight(OMISScene scene, const double direction[3]
 OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]) {
     return add_light(scene, "omisSetWorld",
                      [&] { return omis::make_world_light(vec3(radiance, "radiance")); });
+}
+
+namespace {
+
+// The world light of an image (rows top first), with the rotation checked.
+omis::Light world_image_light(std::vector<float> rgb, std::size_t width, std::size_t height,
+                              const double rotation[3], bool compensate) {
+    if (width == 0 || height == 0 || width > (1u << 16) || height > (1u << 16))
+        throw std::invalid_argument("world image: width and height must be in 1..65536, got " +
+                                    std::to_string(width) + " x " + std::to_string(height));
+    const omis::Vec3 euler = rotation ? vec3(rotation, "rotation") : omis::Vec3();
+    return omis::make_environment_light(std::make_shared<const omis::EnvironmentMap>(
+        std::move(rgb), int(width), int(height), euler, compensate));
+}
+
+}  // namespace
+
+OMIS_API unsigned int omisSetWorldImage(OMISScene scene, const float* rgb, size_t width,
+                                        size_t height, size_t rowByteStride,
+                                        const double rotation[3], bool compensate) {
+    return add_light(scene, "omisSetWorldImage", [&] {
+        if (!rgb) throw std::invalid_argument("rgb: is NULL");
+        const std::size_t row_floats = width * 3;
+        const std::size_t stride = rowByteStride ? rowByteStride : row_floats * sizeof(float);
+        if (stride < row_floats * sizeof(float) || stride % sizeof(float) != 0)
+            throw std::invalid_argument("rowByteStride: must be 0 or a multiple of 4 of at "
+                                        "least width x 3 x 4 bytes");
+        std::vector<float> packed(row_floats * height);
+        const char* bytes = reinterpret_cast<const char*>(rgb);
+        for (std::size_t r = 0; r < height; ++r)
+            std::memcpy(packed.data() + r * row_floats, bytes + r * stride,
+                        row_floats * sizeof(float));
+        return world_image_light(std::move(packed), width, height, rotation, compensate);
+    });
+}
+
+OMIS_API unsigned int omisSetWorldImageFile(OMISScene scene, const char* path,
+                                            const double rotation[3], bool compensate) {
+    return add_light(scene, "omisSetWorldImageFile", [&] {
+        if (!path) throw std::invalid_argument("path: is NULL");
+        omis::RgbImage image;
+        try {
+            image = omis::read_rgb_image(path);
+        } catch (const std::runtime_error& e) {
+            throw std::invalid_argument(e.what());
+        }
+        return world_image_light(std::move(image.rgb), std::size_t(image.width),
+                                 std::size_t(image.height), rotation, compensate);
+    });
 }
 
 OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,

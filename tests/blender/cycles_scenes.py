@@ -391,6 +391,72 @@ def scene_blockout(size=SIZE):
     return objs
 
 
+def _yard(size):
+    """A floor with a wall and a pillar, open to the sky (the image-world scenes)."""
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    U.add_box("wall", (0.1, 1.2, 0.6), (0.6, 0.2, 0.3))
+    U.add_box("pillar", (0.2, 0.2, 0.9), (-0.4, -0.3, 0.45))
+    return objs
+
+
+def scene_hdri_open(size=SIZE):
+    # Issue 34: an Environment Texture sky with a small bright sun over occluders.
+    objs = _yard(size)
+    U.image_world(U.sky_image())
+    return objs
+
+
+def scene_hdri_rotated(size=SIZE):
+    # The same sky turned by a Mapping node (Euler XYZ), with Strength 0.5.
+    objs = _yard(size)
+    U.image_world(U.sky_image(), strength=0.5, rotation=(U.deg(10), U.deg(-15), U.deg(70)))
+    return objs
+
+
+def scene_hdri_mix(size=SIZE):
+    # The sky added to a constant Background (a mixed world).
+    objs = _yard(size)
+    U.image_world(U.sky_image(), mix_constant=((0.9, 0.7, 0.5), 0.6))
+    return objs
+
+
+def scene_sky_texture(size=SIZE):
+    # A Nishita Sky Texture world (its sun disc included) over the yard.
+    objs = _yard(size)
+    world = U.constant_world()
+    nodes = world.node_tree.nodes
+    sky = nodes.new("ShaderNodeTexSky")
+    sky.sky_type = 'NISHITA'
+    sky.sun_elevation = U.deg(35)
+    sky.sun_rotation = U.deg(60)
+    sky.sun_size = U.deg(3)
+    world.node_tree.links.new(sky.outputs["Color"], nodes["Background"].inputs["Color"])
+    nodes["Background"].inputs["Strength"].default_value = 0.05
+    return objs
+
+
+def scene_hdri_window(size=SIZE):
+    # A closed room lit only through a window in its east wall by the image sky,
+    # whose sun shines through it onto the floor.
+    img = U.make_image("bake", size)
+    objs = [receiver(img, size=2.0, cuts=2)]
+    h = 1.5
+    for name, extent, center in (("wall_w", (0.1, 2.2, h), (-1.05, 0, h / 2)),
+                                 ("wall_n", (2.2, 0.1, h), (0, 1.05, h / 2)),
+                                 ("wall_s", (2.2, 0.1, h), (0, -1.05, h / 2)),
+                                 ("ceiling", (2.2, 2.2, 0.1), (0, 0, h + 0.05)),
+                                 # the east wall around the window y ∈ [−0.4, 0.4],
+                                 # z ∈ [0.5, 1.1]
+                                 ("wall_e_low", (0.1, 2.2, 0.5), (1.05, 0, 0.25)),
+                                 ("wall_e_high", (0.1, 2.2, 0.4), (1.05, 0, 1.3)),
+                                 ("wall_e_s", (0.1, 0.7, 0.6), (1.05, -0.75, 0.8)),
+                                 ("wall_e_n", (0.1, 0.7, 0.6), (1.05, 0.75, 0.8))):
+        U.add_box(name, extent, center)
+    U.image_world(U.sky_image(sun_elevation=35.0, sun_azimuth=0.0))
+    return objs
+
+
 SCENES = {
     "area": scene_area,
     "area_round": scene_area_round,
@@ -413,6 +479,11 @@ SCENES = {
     "wall_through_wall": scene_wall_through_wall,
     "thin_wall_rooms": scene_thin_wall_rooms,
     "blockout": scene_blockout,
+    "hdri_open": scene_hdri_open,
+    "hdri_rotated": scene_hdri_rotated,
+    "hdri_mix": scene_hdri_mix,
+    "sky_texture": scene_sky_texture,
+    "hdri_window": scene_hdri_window,
 }
 
 # Objects of a scene that have texels inside other objects (or on their

@@ -90,6 +90,64 @@ def constant_world(name="World", color=None, strength=1.0):
     return world
 
 
+def sky_image(name="sky", width=512, sun_elevation=35.0, sun_azimuth=-20.0, sun_diameter=3.0,
+              sun_radiance=2000.0):
+    """A procedural equirectangular HDR sky (nothing downloaded): a blue gradient
+    above the horizon, a dim ground and a small, very bright sun disc toward
+    (elevation, azimuth) in degrees, as a float Blender image (rows bottom first,
+    Cycles' convention: u = 0.5 - atan2(y, x)/2π, v = 1 - acos(z)/π)."""
+    import numpy as np
+    height = width // 2
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height) + 0.5) / height  # bottom row first
+    phi = math.pi * (1 - 2 * u)[None, :]
+    theta = math.pi * (1 - v)[:, None]
+    d = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
+                                     np.cos(theta)), axis=-1)
+    z = d[..., 2:3]
+    rgb = np.where(z > 0, (1 - z) * np.array([0.6, 0.8, 1.0]) + z * np.array([0.2, 0.35, 0.8]),
+                   np.array([0.08, 0.07, 0.06]))
+    el, az = math.radians(sun_elevation), math.radians(sun_azimuth)
+    sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    rgb[d @ sun >= math.cos(math.radians(sun_diameter / 2))] = sun_radiance * np.array(
+        [1.0, 0.95, 0.9])
+    img = bpy.data.images.new(name, width, height, float_buffer=True, alpha=True)
+    rgba = np.concatenate([rgb, np.ones((height, width, 1))], axis=-1).astype(np.float32)
+    img.pixels.foreach_set(rgba.ravel())
+    img.pack()
+    return img
+
+
+def image_world(image, strength=1.0, rotation=None, mix_constant=None, name="World"):
+    """A world of an Environment Texture (optionally through a Mapping node's
+    rotation, optionally added to a constant Background), made the scene's."""
+    world = bpy.data.worlds.new(name)
+    world.use_nodes = True
+    nodes, links = world.node_tree.nodes, world.node_tree.links
+    background = nodes["Background"]
+    background.inputs["Strength"].default_value = strength
+    env = nodes.new("ShaderNodeTexEnvironment")
+    env.image = image
+    links.new(env.outputs["Color"], background.inputs["Color"])
+    if rotation is not None:
+        coords = nodes.new("ShaderNodeTexCoord")
+        mapping = nodes.new("ShaderNodeMapping")
+        mapping.inputs["Rotation"].default_value = rotation
+        links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+        links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    if mix_constant is not None:
+        color, constant_strength = mix_constant
+        constant = nodes.new("ShaderNodeBackground")
+        constant.inputs["Color"].default_value = (*color, 1.0)
+        constant.inputs["Strength"].default_value = constant_strength
+        add = nodes.new("ShaderNodeAddShader")
+        links.new(background.outputs[0], add.inputs[0])
+        links.new(constant.outputs[0], add.inputs[1])
+        links.new(add.outputs[0], nodes["World Output"].inputs["Surface"])
+    bpy.context.scene.world = world
+    return world
+
+
 def image_material(name, image):
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True

@@ -247,8 +247,10 @@ def test_emission_and_world():
     check(e.counts["emissive_meshes"] == 1, f"emissive meshes {e.counts}")
     check(any("textured emission" in w and "TexturedGlow" in w for w in e.warnings),
           f"textured emission not reported: {e.warnings}")
-    check(any("textured background" in w for w in e.warnings), f"sky not reported: {e.warnings}")
-    check(e.has_light and not e.counts["world"], "the textured world must be ignored")
+    check(not any("background" in w for w in e.warnings), f"sky warned about: {e.warnings}")
+    worlds = [l for l in e.lights if l["kind"] == "world"]
+    check(e.counts["world"] and len(worlds) == 1 and worlds[0]["image_shape"][2] == 3,
+          f"the sky must be exported as a world image: {worlds}")
     bpy.context.scene.world = None
     e = run_export([plane])
     check("world" not in e.counts["lights"], "no world → no world light")

@@ -38,7 +38,8 @@
  *          omisCommitDirectLighting, omisExecuteDirectLighting).
  *   0.2.1: omisGetBakeResultWork (OMISBakeWork: draws, drawsPerTexel,
  *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules.
- *   0.2.2: omisGetBakeResultBuriedTexels. */
+ *   0.2.2: omisGetBakeResultBuriedTexels; omisSetWorldImage, omisSetWorldImageFile
+ *          (image-based worlds). */
 #define OMIS_VERSION_MAJOR 0
 #define OMIS_VERSION_MINOR 2
 #define OMIS_VERSION_PATCH 2
@@ -210,6 +211,24 @@ OMIS_API unsigned int omisAddSunLight(OMISScene scene, const double direction[3]
                                            const double irradiance[3], double angle);
 /* Constant radiance from every direction; a second call replaces the first. */
 OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]);
+/* An image-based world (replaces an earlier world): an equirectangular RGB
+ * radiance map in Cycles' convention — u = 0.5 − atan2(y, x)/(2π),
+ * v = 1 − acos(z)/π: the image's centre looks along +X, u grows toward −Y,
+ * row 0 is the top row (the zenith, +Z). `rgb`: height rows of width × 3
+ * floats, row r starting rowByteStride·r bytes after rgb (0: packed), copied
+ * before the call returns. `rotation`: Euler XYZ in radians as Blender's
+ * Mapping node (the map is looked up at Rz·Ry·Rx·ω; NULL: none).
+ * `compensate`: draw from max(0, map − mean) (MIS compensation, Karlík et
+ * al. 2019) instead of the map. NaN, infinite or negative texels, a
+ * non-finite rotation or a size of 0 give OMIS_ERROR_INVALID_ARGUMENT. */
+OMIS_API unsigned int omisSetWorldImage(OMISScene scene, const float* rgb, size_t width,
+                                        size_t height, size_t rowByteStride,
+                                        const double rotation[3], bool compensate);
+/* The same from an image file read with OpenImageIO (EXR, Radiance HDR, ...;
+ * grey images are spread to RGB, alpha is dropped). A file that cannot be
+ * read gives OMIS_ERROR_INVALID_ARGUMENT naming the path. */
+OMIS_API unsigned int omisSetWorldImageFile(OMISScene scene, const char* path,
+                                            const double rotation[3], bool compensate);
 /* Blender's cycles.cast_shadow and cycles.use_multiple_importance_sampling
  * (false: the `bsdf` technique does not see the light). Before commit only. */
 OMIS_API void omisSetLightFlags(OMISScene scene, unsigned int light, bool castShadow,
