@@ -58,6 +58,12 @@ def test_two_workers_give_the_local_bits(room, local_bits, cluster):
     assert bits(result) == local_bits
     assert result.stats["tasks"] == 8 and result.stats["covered"] == SIZE[0] * SIZE[1]
     assert result.stats["samples_per_texel"] == SETTINGS["samples"]
+    # A noise target works per tile, as locally: texels stop where they stop there.
+    noisy = dict(SETTINGS, samples=128, noise_target=0.08)
+    here = omis.bake_uv(scene, floor, *SIZE, **noisy)
+    farmed = omis.bake_uv(scene, floor, *SIZE, client=client, tiles_per_task=3, **noisy)
+    assert here.stats["samples_per_texel"] < 128  # some texels stopped early
+    assert bits(farmed) == bits(here)
 
 
 def test_a_worker_killed_mid_bake_costs_nothing_but_time(room, local_bits, cluster):
