@@ -114,7 +114,6 @@ def _task_options(options, tasks, slots):
     task's share; one thread per task unless asked (workers run tasks side
     by side)."""
     per_task = dict(options)
-    per_task.pop("progress", None)
     per_task.setdefault("threads", 1)
     budget = per_task.get("time_budget")
     if budget is not None:
@@ -144,8 +143,8 @@ def _merge_stats(parts, native, started, tasks):
 
 
 def _gather_with_progress(client, futures, progress):
-    """The tasks' results in task order; progress(fraction) after each task
-    (False cancels them and raises omis.Cancelled)."""
+    """Waits for the tasks; progress(fraction) after each one (False cancels
+    them and raises omis.Cancelled)."""
     from distributed import as_completed
 
     done = 0
@@ -154,37 +153,10 @@ def _gather_with_progress(client, futures, progress):
         if progress is not None and progress(done / len(futures)) is False:
             client.cancel(futures)
             raise _omis.Cancelled("bake: cancelled")
-    return client.gather(futures)
 
 
-def bake_uv_distributed(client, scene, mesh, width, height, *, tiles_per_task=None,
-                        retries=3, **options):
-    """omis.bake_uv with client=: see the module's description. tiles_per_task
-    sets the tasks' size (default: about four tasks per cluster slot); retries:
-    how often Dask re-runs a task that raised (lost workers' tasks are re-run
-    by the scheduler anyway)."""
-    started = time.monotonic()
-    progress = options.get("progress")
-    tiles = _omis.bake_tile_count(width, height)
-    slots = cluster_slots(client)
-    if tiles_per_task is None:
-        tiles_per_task = max(1, math.ceil(tiles / (4 * slots)))
-    if tiles_per_task < 1:
-        raise ValueError("tiles_per_task: must be at least 1")
-    ranges = split_tiles(tiles, math.ceil(tiles / tiles_per_task))
-    per_task = _task_options(options, len(ranges), slots)
-
-    snapshot = scene.to_bytes()
-    digest = hashlib.sha256(snapshot).hexdigest()
-    shared = client.scatter(snapshot, broadcast=True, hash=False)
-    futures = [client.submit(bake_tile_range, digest, shared, mesh, width, height, first, count,
-                             per_task, retries=retries, pure=False)
-               for first, count in ranges]
-    try:
-        parts = _gather_with_progress(client, futures, progress)
-    finally:
-        client.cancel(futures + [shared])
-
+def _compose(scene, mesh, width, height, parts, options, started, tasks):
+    """A DistributedBakeResult from one lightmap's parts (task results)."""
     value = np.zeros((height, width, 3), np.float32)
     noise = np.zeros((height, width), np.float32)
     mask = np.zeros((height, width), np.float32)
@@ -197,4 +169,46 @@ def bake_uv_distributed(client, scene, mesh, width, height, *, tiles_per_task=No
     native = _omis.compose_bake_uv(scene, mesh, width, height, value, noise, mask,
                                    margin=options.get("margin", 16),
                                    margin_type=options.get("margin_type", "extend"))
-    return DistributedBakeResult(native, _merge_stats(parts, native, started, len(ranges)))
+    return DistributedBakeResult(native, _merge_stats(parts, native, started, tasks))
+
+
+def bake_uv_many(client, scene, bakes, *, tiles_per_task=None, retries=3, progress=None,
+                 **options):
+    """Several lightmaps of one scene on the cluster at once: bakes is a list of
+    (mesh, width, height); returns their DistributedBakeResults in that order.
+    All their tasks are queued together (no idle workers between lightmaps)
+    and the snapshot is sent once. tiles_per_task: the tasks' size (default:
+    about four tasks per cluster slot over all the lightmaps, at least one
+    task a lightmap); retries: how often Dask re-runs a task that raised (a
+    lost worker's tasks are re-run by the scheduler anyway); a time_budget is
+    the whole call's."""
+    started = time.monotonic()
+    tiles = [_omis.bake_tile_count(w, h) for _, w, h in bakes]
+    slots = cluster_slots(client)
+    if tiles_per_task is None:
+        tiles_per_task = max(1, math.ceil(sum(tiles) / (4 * slots)))
+    if tiles_per_task < 1:
+        raise ValueError("tiles_per_task: must be at least 1")
+    ranges = [split_tiles(n, math.ceil(n / tiles_per_task)) for n in tiles]
+    tasks = sum(len(r) for r in ranges)
+    per_task = _task_options(options, tasks, slots)
+
+    snapshot = scene.to_bytes()
+    digest = hashlib.sha256(snapshot).hexdigest()
+    shared = client.scatter(snapshot, broadcast=True, hash=False)
+    futures = [[client.submit(bake_tile_range, digest, shared, mesh, width, height, first, count,
+                              per_task, retries=retries, pure=False) for first, count in r]
+               for (mesh, width, height), r in zip(bakes, ranges)]
+    flat = [f for fs in futures for f in fs]
+    try:
+        _gather_with_progress(client, flat, progress)
+        parts = [client.gather(fs) for fs in futures]
+    finally:
+        client.cancel(flat + [shared])
+    return [_compose(scene, mesh, width, height, p, options, started, len(p))
+            for (mesh, width, height), p in zip(bakes, parts)]
+
+
+def bake_uv_distributed(client, scene, mesh, width, height, **options):
+    """omis.bake_uv with client=: bake_uv_many for one lightmap."""
+    return bake_uv_many(client, scene, [(mesh, width, height)], **options)[0]

@@ -164,32 +164,64 @@ def farm_or_local(scene, mesh, width, height, options, client, progress):
     return bake_uv(scene, mesh, width, height, client=client, progress=progress, **options)
 
 
+def _unit_options(settings, options, unit):
+    out = dict(options)
+    if unit["kind"] == "uv":
+        out["margin"] = settings.get("margin", 16)
+        out["margin_type"] = settings.get("margin_type", "extend")
+    return out
+
+
+def _label(unit, n, total):
+    name = unit.get("image") or unit.get("attribute") or ""
+    return f"[{n + 1}/{total}] {unit.get('object', unit['mesh'])} → {name}"
+
+
 def run_job(path, client=None, stream=sys.stderr, units=None):
-    """Bakes every unit of a job (or those listed) and writes their outputs."""
+    """Bakes every unit of a job (or those listed) and writes their outputs.
+    With a client, the lightmaps' tiles go to the cluster all at once
+    (farm.bake_uv_many); colour attributes bake here."""
     job = load_job(path)
     scene = _omis.Scene.load(job["snapshot"])
     settings = job["settings"]
     options = bake_options(settings)
-    chosen = range(len(job["units"])) if units is None else units
-    weights = [unit_weight(job["units"][k]) for k in chosen]
+    chosen = list(range(len(job["units"])) if units is None else units)
+    here = [k for k in chosen if client is None or job["units"][k]["kind"] != "uv"]
+    farmed = [k for k in chosen if k not in here]
+    weights = {k: unit_weight(job["units"][k]) for k in chosen}
     budget = options.pop("time_budget", None)
     started = time.monotonic()
-    for n, k in enumerate(chosen):
+    for n, k in enumerate(here):
         unit = job["units"][k]
-        unit_options = dict(options)
-        if unit["kind"] == "uv":
-            unit_options["margin"] = settings.get("margin", 16)
-            unit_options["margin_type"] = settings.get("margin_type", "extend")
+        unit_options = _unit_options(settings, options, unit)
         if budget is not None:  # the whole job's: shared out by the units' weights
             left = float(budget) - (time.monotonic() - started)
-            unit_options["time_budget"] = max(1e-3, left * weights[n] / sum(weights[n:]))
-        name = unit.get("image") or unit.get("attribute") or ""
-        label = f"[{n + 1}/{len(chosen)}] {unit.get('object', unit['mesh'])} → {name}"
-        progress = TerminalProgress(label, stream)
-        result = bake_unit(scene, unit, unit_options, client, progress)
+            share = weights[k] / sum(weights[j] for j in chosen[chosen.index(k):])
+            unit_options["time_budget"] = max(1e-3, left * share)
+        progress = TerminalProgress(_label(unit, n, len(chosen)), stream)
+        result = bake_unit(scene, unit, unit_options, None, progress)
         write_result(unit["output"], result)
         progress.done(result.stats)
+    if farmed:
+        _run_on_cluster(job, scene, farmed, options, budget, started, client, stream)
     return job
+
+
+def _run_on_cluster(job, scene, farmed, options, budget, started, client, stream):
+    settings = job["settings"]
+    units = [job["units"][k] for k in farmed]
+    uv_options = _unit_options(settings, options, units[0])
+    if budget is not None:
+        uv_options["time_budget"] = max(1e-3, float(budget) - (time.monotonic() - started))
+    bakes = [(resolve_mesh(scene, u["mesh"]), u["width"], u["height"]) for u in units]
+    progress = TerminalProgress(f"{len(units)} lightmaps on {client.scheduler.address}", stream)
+    results = farm.bake_uv_many(client, scene, bakes, progress=progress, **uv_options)
+    for unit, result in zip(units, results):
+        write_result(unit["output"], result)
+    progress.done({"samples_per_texel": sum(r.stats["samples"] for r in results) /
+                   max(1, sum(r.stats["covered"] for r in results)),
+                   "mean_relative_error": float(np.mean([r.stats["mean_relative_error"]
+                                                         for r in results]))})
 
 
 # ---- Tile ranges of one unit (a farm's tasks) ----------------------------------

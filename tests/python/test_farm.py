@@ -129,9 +129,12 @@ def write_job(scene, folder):
     return path, job
 
 
-def test_command_line_bakes_a_job_and_its_tile_ranges(room, local_bits, tmp_path):
+def test_command_line_bakes_a_job_and_its_tile_ranges(room, local_bits, cluster, tmp_path):
     scene, floor = room
     path, _ = write_job(scene, tmp_path)
+    assert cli_main(["bake", str(path), "--scheduler", cluster[0].scheduler_address]) == 0
+    assert arrays(tmp_path / "out/floor.npz") == local_bits
+    os.remove(tmp_path / "out/floor.npz")
     omis_cli("bake", str(path))
     assert arrays(tmp_path / "out/floor.npz") == local_bits
     corners = omis.bake_vertices(scene, 6, domain="CORNER", samples=8, seed=21)
