@@ -33,7 +33,8 @@ from omis import demo, farm
 
 def rotate_x(vertices, quarter_turns):
     """Rotation about x by quarter_turns · 90°: +z (the grid's normal) → ∓y."""
-    c, s = round(math.cos(quarter_turns * math.pi / 2)), round(math.sin(quarter_turns * math.pi / 2))
+    angle = quarter_turns * math.pi / 2
+    c, s = round(math.cos(angle)), round(math.sin(angle))
     x, y, z = vertices[:, 0], vertices[:, 1], vertices[:, 2]
     return np.stack([x, c * y - s * z, s * y + c * z], axis=1)
 
@@ -184,7 +185,8 @@ def main():
     t = time.perf_counter()
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:
-        say(f"cluster start (2 worker processes): {time.perf_counter() - t:.2f} s (once, not counted)")
+        say(f"cluster start (2 worker processes): {time.perf_counter() - t:.2f} s "
+            "(once, not counted)")
         noop_s = noop_round_trip(client)
         say(f"Dask round trip of an empty task: {1e3 * noop_s:.2f} ms")
         runs = []

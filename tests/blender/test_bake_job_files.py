@@ -65,7 +65,8 @@ def main():
     expected_image, expected_attribute = local_bake(img, floor, crate)
     U.set_pixels(img, (0.0, 0.0, 0.0, 1.0))
     folder = U.temp_dir()
-    floor_job, crate_job = os.path.join(folder, "floor", "job.json"), os.path.join(folder, "crate", "job.json")
+    floor_job = os.path.join(folder, "floor", "job.json")
+    crate_job = os.path.join(folder, "crate", "job.json")
 
     U.select_only([floor])
     bake_files = omis_bake.bake_job_files
