@@ -109,16 +109,16 @@ class DistributedBakeResult:
         return f"<omis.farm.DistributedBakeResult {w}×{h} lightmap, {self.stats['tasks']} tasks>"
 
 
-def _task_options(options, tasks, slots):
-    """The options each task bakes with: a whole-job time budget becomes each
-    task's share; one thread per task unless asked (workers run tasks side
-    by side)."""
+def _task_options(options, tasks, slots, spent):
+    """The options each task bakes with: a whole-job time budget, less the
+    `spent` seconds before the tasks start, becomes each task's share; one
+    thread per task unless asked (workers run tasks side by side)."""
     per_task = dict(options)
     per_task.setdefault("threads", 1)
     budget = per_task.get("time_budget")
     if budget is not None:
         waves = math.ceil(tasks / slots)
-        per_task["time_budget"] = float(budget) / waves
+        per_task["time_budget"] = max(1e-3, float(budget) - spent) / waves
     return per_task
 
 
@@ -191,11 +191,11 @@ def bake_uv_many(client, scene, bakes, *, tiles_per_task=None, retries=3, progre
         raise ValueError("tiles_per_task: must be at least 1")
     ranges = [split_tiles(n, math.ceil(n / tiles_per_task)) for n in tiles]
     tasks = sum(len(r) for r in ranges)
-    per_task = _task_options(options, tasks, slots)
 
     snapshot = scene.to_bytes()
     digest = hashlib.sha256(snapshot).hexdigest()
     shared = client.scatter(snapshot, broadcast=True, hash=False)
+    per_task = _task_options(options, tasks, slots, time.monotonic() - started)
     futures = [[client.submit(bake_tile_range, digest, shared, mesh, width, height, first, count,
                               per_task, retries=retries, pure=False) for first, count in r]
                for (mesh, width, height), r in zip(bakes, ranges)]
