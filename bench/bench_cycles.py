@@ -38,12 +38,17 @@ Per scene:
   spread by up to ~5× (demo_room, bench/results/low_spp.txt).
 
 Writes DIR/bench_cycles.csv, DIR/bench_cycles.png (relMSE vs time, log-log, one
-panel per scene) and DIR/table.txt.
+panel per scene) and DIR/table.txt, each naming the commit, date and command of
+the run (`# commit:`, `# date:`, `# command:` lines at the top of the CSV and the
+table; the plot's title). scripts/race_table.py copies them to bench/results/
+and refreshes README.md's table.
 """
 
 import argparse
 import csv
+import datetime
 import os
+import subprocess
 import sys
 import time
 
@@ -320,7 +325,7 @@ def table(rows, summaries, budgets):
     return "\n".join(lines)
 
 
-def plot(path, rows, summaries):
+def plot(path, rows, summaries, measured):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -355,11 +360,28 @@ def plot(path, rows, summaries):
         ax.axis("off")
     axes.ravel()[0].legend(fontsize=8)
     fig.suptitle("Direct-lighting bake, equal time: Cycles vs omis (Blender "
-                 f"{bpy.app.version_string})")
+                 f"{bpy.app.version_string}; omis {measured})")
     fig.tight_layout()
     tmp = path + ".tmp.png"
     fig.savefig(tmp, dpi=100)
     os.replace(tmp, path)
+
+
+def provenance(argv):
+    """(commit, date, command) of this run: the source tree's commit ('+' when tracked
+    files differ from it), the UTC date, and the command line that reproduces it."""
+    def git(*a):
+        try:
+            return subprocess.run(["git", "-C", ROOT, *a], capture_output=True, text=True,
+                                  check=True).stdout.strip()
+        except (OSError, subprocess.CalledProcessError):
+            return ""
+    commit = git("rev-parse", "--short=7", "HEAD") or "unknown"
+    if git("status", "--porcelain", "--untracked-files=no"):
+        commit += "+"
+    date = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+    command = " ".join(["bash scripts/blender_run.sh bench/bench_cycles.py", *argv])
+    return commit, date, command
 
 
 def main():
@@ -414,6 +436,8 @@ def main():
     args.size = args.size or size
     out = os.path.abspath(args.out)
     os.makedirs(out, exist_ok=True)
+    commit, date, command = provenance(script_args())
+    header = f"# commit: {commit}\n# date: {date}\n# command: {command}\n"
 
     start = time.perf_counter()
     log(f"bench_cycles: scenes {', '.join(scenes)}; budgets {args.budgets} s; references "
@@ -426,15 +450,16 @@ def main():
     text = table(rows, summaries, args.budgets)
     log("\n" + text)
     with open(os.path.join(out, "table.txt"), "w") as f:
-        f.write(text + "\n")
+        f.write(header + text + "\n")
     with open(os.path.join(out, "bench_cycles.csv"), "w", newline="") as f:
+        f.write(header)
         fields = ["scene", "strategy", "budget", "seconds", "bake_seconds",
                   "samples_per_texel", "draws_per_texel", "rel_mse", "resolution", "unresolved", "ref_floor",
                   "ratio_vs_cycles", "ratio_at_spp"]
         w = csv.DictWriter(f, fieldnames=fields, extrasaction="ignore")
         w.writeheader()
         w.writerows(rows)
-    plot(os.path.join(out, "bench_cycles.png"), rows, summaries)
+    plot(os.path.join(out, "bench_cycles.png"), rows, summaries, f"{commit}, {date}")
     log(f"\nwrote {out}/: bench_cycles.csv, bench_cycles.png, table.txt "
         f"({time.perf_counter() - start:.0f} s)")
 

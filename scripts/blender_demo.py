@@ -5,7 +5,7 @@ balance heuristic — and write the images, a noise comparison and the table.
     bash scripts/blender_run.sh scripts/blender_demo.py --out out/demo [--seconds S] [--size N]
 
 The room is the one of bindings/omis/demo.py (same meshes, built from the same
-helpers); its two rectangular lights become Blender AREA lights whose Cycles
+functions); its two rectangular lights become Blender AREA lights whose Cycles
 3.4 units give the same radiance: L = P·c/(4A), so P = 4·A·L; Blender area
 lights emit along their local −Z.
 
@@ -32,7 +32,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "tests", "blender"))
 from demo_bake import noise_comparison  # noqa: E402  (one plot for both demos)
-# Argument, log and image-material helpers shared with the Blender tests.
+# Argument, log and image-material functions shared with the Blender tests.
 from omis_test_utils import args as script_args, image_material, log, make_image  # noqa: E402
 
 

@@ -1,7 +1,7 @@
 """omis — optimal multiple importance sampling for baked direct lighting.
 
 The native part (``omis._omis``) is a pybind11 module over the library's C ABI;
-this package re-exports it and adds the pure-Python helpers (``blender_units``
+this package re-exports it and adds the pure-Python modules (``blender_units``
 for Blender/Cycles light conversions, ``demo`` for the built-in scene, ``farm``
 for bakes on a Dask cluster, ``job`` for bake jobs and ``python3 -m omis``).
 """

@@ -1001,7 +1001,7 @@ double PointLighting::Impl::centre_weight(std::size_t i, const SurfacePoint& cen
 // rest keeps them). Measured per sample on the emissive_mesh race scene (the
 // sphere hiding part of the square light): relMSE 0.74×, 0.54×, 0.34× at 16,
 // 64, 256 samples, most in the penumbra (bench/results/error_sources.txt,
-// h-emesh9).
+// 2026-12-01).
 void PointLighting::Impl::begin_selector_draw(int k, const ScrambledSobol& sequence,
                                               std::uint32_t index, const SurfacePoint& centre,
                                               const Footprint* footprint, SelectorDraw& d) {
@@ -1870,7 +1870,7 @@ void PointLighting::Impl::take_occluder_sample(const Active& active, const Surfa
         // A point uniform on the face's area: density d²/(A cos_F) in solid
         // angle. Against a spherical rectangle (uniform in solid angle) on
         // emission_world: 1–5 % more error per sample, 1.4× cheaper a round
-        // (bench/results/error_sources.txt, 2026-12-01 h-world9).
+        // (bench/results/error_sources.txt, 2026-12-01).
         const Face& face = faces[f];
         const Vec3 to = face.corner + u1 * face.edge_u + u2 * face.edge_v - p.x;
         const double d2 = dot(to, to);

@@ -162,7 +162,7 @@ bool world_seen_through_emitters(const Scene& scene) {
 // varies only with the cosine where a box's mesh fills it. Measured per sample
 // on emission_world (a box and the receiver; omis optimal relMSE ÷ Cycles' at
 // 16/64/256 samples): 1.23/1.30/1.35 → 0.53/0.44/0.48, at 1.13× the time a
-// round (bench/results/error_sources.txt, 2026-12-01, h-world9).
+// round (bench/results/error_sources.txt, 2026-12-01).
 std::vector<EffectPlan::OccluderBox> world_occluders(const Scene& scene) {
     std::vector<EffectPlan::OccluderBox> boxes;
     const std::vector<Mesh>& meshes = scene.geometry().meshes();

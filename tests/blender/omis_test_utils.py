@@ -1,4 +1,4 @@
-"""Helpers shared by the headless Blender tests (run through scripts/blender_run.sh)."""
+"""Functions shared by the headless Blender tests (run through scripts/blender_run.sh)."""
 
 import importlib.util
 import math

@@ -25,7 +25,9 @@ import omis_test_utils as U  # noqa: E402
 from omis_bake import operators, ui  # noqa: E402
 
 TIMEOUT = 120.0
-OUT = os.path.join(os.environ.get("OMIS_BUILD_DIR", U.temp_dir()), "test_screenshots")
+# OMIS_SCREENSHOT_DIR: where scripts/docs_images.sh collects docs/images/panel.png.
+OUT = os.environ.get("OMIS_SCREENSHOT_DIR") or os.path.join(
+    os.environ.get("OMIS_BUILD_DIR", U.temp_dir()), "test_screenshots")
 # A panel of a dozen rows covers thousands of pixels of a ~1280×700 editor; 0.5 %
 # of the area (~4500 px) is far above anti-aliasing jitter and far below a panel.
 MIN_CHANGED = 0.005

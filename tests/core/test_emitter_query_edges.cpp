@@ -22,7 +22,7 @@ TEST_CASE("closest_hit_and_emitters: a ray single precision moves off a light it
     // at the scale kNearEdge is sized for: coordinates ~1, origins 2 away.
     // (Far from the world origin or with cells under ~1 mm at metres, the
     // float rounding of the ray and the vertices exceeds kNearEdge: see
-    // bench/results/emitters.txt, h-edge8.)
+    // bench/results/emitters.txt, emitter-query edges.)
     constexpr int n = 24;
     const Vec3 centre(0.3, -0.2, 1.1);
     const Vec3 a = normalize(Vec3(1, 0.3, 0.2)) * 0.01;
