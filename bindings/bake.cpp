@@ -163,6 +163,7 @@ struct BakeOptions {
     py::object progress;
     int threads;
     std::string margin_type = "extend";   // lightmaps: "extend" or "adjacent-faces"
+    long long first_tile = 0, tile_count = 0;  // lightmaps: a tile range (0 tiles: all)
 };
 
 BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target, int width,
@@ -188,6 +189,12 @@ BakeResult run_bake(const Scene& scene, unsigned int mesh, OMISBakeTarget target
         if (o.margin_type != "extend" && o.margin_type != "adjacent-faces")
             bad("margin_type", "expected 'extend' or 'adjacent-faces', got '" + o.margin_type + "'");
         omisSetBakeString(b, "marginType", o.margin_type.c_str());
+        if (o.first_tile < 0 || o.tile_count < 0)
+            bad("tiles", "first_tile and tile_count must not be negative");
+        if (o.first_tile > 0 || o.tile_count > 0) {
+            omisSetBakeInt(b, "firstTile", o.first_tile);
+            omisSetBakeInt(b, "tileCount", o.tile_count);
+        }
     }
     if (o.samples < 1) bad("samples", "the sample budget must be at least 1");
     omisSetBakeInt(b, "samples", o.samples);
@@ -269,10 +276,44 @@ BakeResult bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
                    const std::string& strategy, double beta, double cutoff,
                    const py::object& time_budget, const py::object& noise_target, int margin,
                    const py::object& seed, bool smooth_normals, const py::object& progress,
-                   int threads, const std::string& margin_type) {
+                   int threads, const std::string& margin_type, long long first_tile,
+                   long long tile_count) {
     return run_bake(scene, mesh, OMIS_BAKE_LIGHTMAP, width, height, margin,
                     {techniques, counts, samples, strategy, beta, cutoff, time_budget,
-                     noise_target, seed, smooth_normals, progress, threads, margin_type});
+                     noise_target, seed, smooth_normals, progress, threads, margin_type,
+                     first_tile, tile_count});
+}
+
+// The tiles of a lightmap bake (16×16 texels each, row-major from the bottom).
+std::size_t bake_tile_count(int width, int height) {
+    if (width < 1 || height < 1) bad("width, height", "must be positive");
+    return (std::size_t(width) + 15) / 16 * ((std::size_t(height) + 15) / 16);
+}
+
+// A lightmap put together from tile-range bakes (value (H, W, 3), noise and
+// mask (H, W)), its margin filled as a whole bake of the mesh fills it.
+BakeResult compose_bake_uv(const Scene& scene, unsigned int mesh, int width, int height,
+                           const py::array_t<float, py::array::c_style | py::array::forcecast>& value,
+                           const py::array_t<float, py::array::c_style | py::array::forcecast>& noise,
+                           const py::array_t<float, py::array::c_style | py::array::forcecast>& mask,
+                           int margin, const std::string& margin_type) {
+    if (width < 1 || height < 1) bad("width, height", "must be positive");
+    const py::ssize_t n = py::ssize_t(width) * height;
+    if (value.size() != 3 * n) bad("value", "expected (height, width, 3) floats");
+    if (noise.size() != n) bad("noise", "expected (height, width) floats");
+    if (mask.size() != n) bad("mask", "expected (height, width) floats");
+    omis::capi::BakeRef bake(omisNewBake(scene.get(), OMIS_BAKE_LIGHTMAP, mesh));
+    if (!bake) raise_pending_error();
+    omisSetBakeInt(bake.get(), "width", width);
+    omisSetBakeInt(bake.get(), "height", height);
+    omisSetBakeInt(bake.get(), "margin", margin);
+    omisSetBakeString(bake.get(), "marginType", c_string(margin_type, "margin_type"));
+    raise_if_pending();
+    omisCommitBake(bake.get());
+    raise_if_pending();
+    OMISBakeResult result = omisComposeBakeResult(bake.get(), value.data(), noise.data(), mask.data());
+    if (!result) raise_pending_error();
+    return BakeResult(result, true);
 }
 
 BakeResult bake_vertices(const Scene& scene, unsigned int mesh, const std::string& domain,
@@ -318,7 +359,7 @@ void init_bake(py::module_& m) {
           py::arg("time_budget") = py::none(), py::arg("noise_target") = py::none(),
           py::arg("margin") = 16, py::arg("seed") = 0, py::arg("smooth_normals") = true,
           py::arg("progress") = py::none(), py::arg("threads") = 0,
-          py::arg("margin_type") = "extend",
+          py::arg("margin_type") = "extend", py::arg("first_tile") = 0, py::arg("tile_count") = 0,
           R"doc(Bakes E_direct/π into a mesh's UV lightmap of width × height texels.
 
 techniques: names (SPEC §3) or None for the effect plan's choice; counts: samples
@@ -330,7 +371,17 @@ raises omis.Cancelled / KeyboardInterrupt and nothing is returned. threads: work
 threads (0 = all cores); results do not depend on it. margin (texels) and
 margin_type fill the texels around UV islands as Blender's Bake ▸ Margin does:
 'extend' copies the island's nearest texel, 'adjacent-faces' the texel across
-the UV seam on the face adjacent in 3D (extend where there is none).)doc");
+the UV seam on the face adjacent in 3D (extend where there is none).
+first_tile, tile_count: bake only these of the lightmap's 16×16-texel tiles
+(bake_tile_count; 0 tiles: all), each texel with the bits a whole bake gives it,
+the margin left unfilled (compose_bake_uv fills it; omis.farm uses both).)doc");
+    m.def("bake_tile_count", &bake_tile_count, py::arg("width"), py::arg("height"),
+          "How many 16×16-texel tiles a width × height lightmap bake has.");
+    m.def("compose_bake_uv", &compose_bake_uv, py::arg("scene"), py::arg("mesh"),
+          py::arg("width"), py::arg("height"), py::arg("value"), py::arg("noise"), py::arg("mask"),
+          py::kw_only(), py::arg("margin") = 16, py::arg("margin_type") = "extend",
+          "A BakeResult from tile-range bakes' value, noise and mask put together, the margin "
+          "filled as a whole bake of the mesh fills it (stats hold texels and covered only).");
     m.def("predict_halving", &predict_halving, py::arg("history"),
           R"doc(What halving a bake's mean relative error would cost, from a history of
 passes (dicts as in BakeResult.stats["convergence"]: seconds, mean_relative_error,

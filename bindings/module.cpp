@@ -1,12 +1,14 @@
 // pybind11 module omis._omis, built on the C ABI only (plugin/include/omis):
 // this file registers the parts — estimator.cpp (combine), lighting.cpp (Scene,
-// direct_lighting), bake.cpp (bake_uv, bake_vertices, BakeResult).
+// direct_lighting), bake.cpp (bake_uv, bake_vertices, BakeResult), snapshot.cpp (Scene.save,
+// Scene.load, mesh names).
 #include "common.h"
 
 namespace omis_py {
 void init_estimator(py::module_& m);
 void init_scene(py::module_& m);
 void init_bake(py::module_& m);
+void init_snapshot(py::module_& m);
 }  // namespace omis_py
 
 using namespace omis_py;
@@ -38,4 +40,5 @@ PYBIND11_MODULE(_omis, m) {
     init_estimator(m);
     init_scene(m);
     init_bake(m);
+    init_snapshot(m);
 }

@@ -11,6 +11,11 @@ public:
     Scene() : ref_(omisNewScene()) {
         if (!ref_) raise_pending_error();
     }
+    // Adopts a new handle (count 1), e.g. a scene loaded from a snapshot.
+    static Scene adopt(OMISScene handle) {
+        if (!handle) raise_pending_error();
+        return Scene(handle);
+    }
     OMISScene get() const { return ref_.get(); }
 
     unsigned int add_mesh(const py::handle& vertices_in, const py::handle& triangles_in,
@@ -250,6 +255,8 @@ public:
     }
 
 private:
+    explicit Scene(OMISScene handle) : ref_(handle) {}
+
     // Rect and ellipse lights: a point and two perpendicular vectors, checked under
     // the Python argument names.
     using PlanarAdd = unsigned int (*)(OMISScene, const double*, const double*, const double*,

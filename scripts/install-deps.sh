@@ -11,6 +11,7 @@ packages=(
     pybind11-dev python3-pybind11 python3-dev python3-numpy
     catch2
     python3-pytest python3-matplotlib python3-hypothesis
+    python3-distributed
     blender xvfb xauth
 )
 

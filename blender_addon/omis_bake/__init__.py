@@ -25,13 +25,13 @@ bl_info = {
 if "bpy" in locals():  # F3 ▸ Reload Scripts
     import importlib
     for _module in (errors, native, settings, mesh_cache, export, writeback, job,  # noqa: F821
-                    operators, ui):  # noqa: F821
+                    operators, bake_job_files, farm_operators, ui):  # noqa: F821
         importlib.reload(_module)
 
 import bpy  # noqa: E402
 
-from . import (errors, export, job, mesh_cache, native, operators, settings, ui,  # noqa: E402,F401
-               writeback)
+from . import (bake_job_files, errors, export, farm_operators, job, mesh_cache,  # noqa: E402,F401
+               native, operators, settings, ui, writeback)
 from .errors import BakeError, Cancelled  # noqa: E402,F401
 from .job import bake  # noqa: E402,F401
 
@@ -39,7 +39,7 @@ __all__ = ["bake", "BakeError", "Cancelled", "register", "unregister"]
 
 
 def _classes():
-    return (settings.OMIS_PG_settings,) + operators.classes + ui.classes
+    return (settings.OMIS_PG_settings,) + operators.classes + farm_operators.classes + ui.classes
 
 
 def register():

@@ -30,7 +30,7 @@ using Clock = std::chrono::steady_clock;
 
 // Texels are processed in square tiles: neighbours share cache lines and
 // lights' per-point work, and a tile is the unit of progress and cancel.
-constexpr int kTile = 16;
+constexpr int kTile = kBakeTile;
 constexpr std::size_t kSetupTimingStride = 7;  // odd: not aligned with power-of-two rows
 
 // A point of triangle t that lies on another mesh's face has its rays stopped
@@ -199,6 +199,17 @@ void validate(const Scene& scene, const BakeSettings& in) {
     if (in.noise_target < 0 || !std::isfinite(in.noise_target))
         throw std::invalid_argument("noise_target: must be a non-negative relative error");
     if (in.rounds_per_pass < 1) throw std::invalid_argument("rounds_per_pass: must be ≥ 1");
+    if (in.first_tile > 0 || in.tile_count > 0) {
+        if (in.target != BakeTarget::Lightmap)
+            throw std::invalid_argument("tiles: tile ranges are for lightmap bakes only");
+        const std::size_t tiles = bake_tile_count(in.width, in.height);
+        if (in.first_tile >= tiles || in.tile_count > tiles - in.first_tile)
+            throw std::invalid_argument("tiles: range " + std::to_string(in.first_tile) + " + " +
+                                        std::to_string(in.tile_count) + " is outside the " +
+                                        std::to_string(tiles) + " tiles of a " +
+                                        std::to_string(in.width) + "×" + std::to_string(in.height) +
+                                        " lightmap");
+    }
 }
 
 // Where to shade: a lightmap's texels (those inside the UV layout are covered)
@@ -221,9 +232,20 @@ struct BakeLayout {
             tiles_y = 1;
         }
         tiles = std::size_t(tiles_x) * tiles_y;
+        first_tile = settings.first_tile;
+        end_tile = settings.tile_count ? first_tile + settings.tile_count : tiles;
     }
     bool lightmap() const { return target == BakeTarget::Lightmap; }
-    bool covered(std::size_t i) const { return !lightmap() || coverage.is_covered(i); }
+    bool partial() const { return first_tile > 0 || end_tile < tiles; }
+    bool in_range(std::size_t i) const {
+        if (!partial()) return true;
+        const std::size_t x = i % std::size_t(width), y = i / std::size_t(width);
+        const std::size_t tile = y / kTile * std::size_t(tiles_x) + x / kTile;
+        return tile >= first_tile && tile < end_tile;
+    }
+    bool covered(std::size_t i) const {
+        return !lightmap() || (coverage.is_covered(i) && in_range(i));
+    }
     template <class Visit>
     void tile_points(std::size_t tile, Visit&& visit) const {
         if (!lightmap()) {
@@ -242,6 +264,7 @@ struct BakeLayout {
     std::vector<SurfacePoint> points;  // vertex bakes only
     int width = 0, height = 0, tiles_x = 0, tiles_y = 0;
     std::size_t count = 0, tiles = 0;
+    std::size_t first_tile = 0, end_tile = 0;  // the tiles this bake shades
 };
 
 // One pass over every point that is not done.
@@ -429,7 +452,8 @@ std::uint64_t bake_shape(const BakeSettings& s, const BakeLayout& layout) {
     std::ostringstream key;
     key << s.mesh << ' ' << int(s.target) << ' ' << layout.width << 'x' << layout.height << ' '
         << layout.count << ' ' << s.smooth_normals << ' ' << s.lighting.streams << ' '
-        << tbb::this_task_arena::max_concurrency();
+        << tbb::this_task_arena::max_concurrency() << ' ' << layout.first_tile << '-'
+        << layout.end_tile;
     for (std::size_t k = 0; k < s.lighting.techniques.size(); ++k)
         key << ' ' << s.lighting.techniques[k].name() << ':'
             << (k < s.lighting.samples.size() ? s.lighting.samples[k] : 0);
@@ -738,7 +762,7 @@ void Baker::fill_allocation_stats() {
 }
 
 void Baker::run_pass(const Pass& pass) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout_.tiles, 1),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(layout_.first_tile, layout_.end_tile, 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
         PointLighting& shader = shaders_.local();
         std::vector<Shaded> shaded_tile;
@@ -1074,18 +1098,23 @@ std::size_t Baker::count_buried() const {
 }
 
 // The margin around UV islands: copies of the texels it extends.
-void Baker::fill_margin() {
-    if (!layout_.lightmap() || settings_.margin <= 0) return;
-    const UvCoverage& coverage = layout_.coverage;
+// (A tile range leaves it to fill_bake_margin, once the ranges are together.)
+void copy_margin(const UvCoverage& coverage, const Mesh& mesh, const BakeSettings& settings,
+                 float* value, float* noise) {
     const std::vector<std::int64_t> source =
-        settings_.margin_type == MarginType::AdjacentFaces
-            ? adjacent_margin_sources(coverage, mesh_, settings_.margin)
-            : margin_sources(coverage, settings_.margin);
-    for (std::size_t i = 0; i < layout_.count; ++i) {
+        settings.margin_type == MarginType::AdjacentFaces
+            ? adjacent_margin_sources(coverage, mesh, settings.margin)
+            : margin_sources(coverage, settings.margin);
+    for (std::size_t i = 0; i < coverage.triangle.size(); ++i) {
         if (coverage.is_covered(i) || source[i] < 0) continue;
-        for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = result_.value[3 * source[i] + c];
-        result_.noise[i] = result_.noise[source[i]];
+        for (int c = 0; c < 3; ++c) value[3 * i + c] = value[3 * source[i] + c];
+        noise[i] = noise[source[i]];
     }
+}
+
+void Baker::fill_margin() {
+    if (!layout_.lightmap() || settings_.margin <= 0 || layout_.partial()) return;
+    copy_margin(layout_.coverage, mesh_, settings_, result_.value.data(), result_.noise.data());
 }
 
 void Baker::fill_stats() {
@@ -1123,6 +1152,16 @@ BakeResult Baker::run() {
 }
 
 }  // namespace
+
+void fill_bake_margin(const Scene& scene, const BakeSettings& settings, float* value,
+                      float* noise) {
+    BakeSettings whole = settings;
+    whole.first_tile = whole.tile_count = 0;
+    validate(scene, whole);
+    if (whole.target != BakeTarget::Lightmap || whole.margin <= 0) return;
+    const Mesh& mesh = scene.geometry().mesh(whole.mesh);
+    copy_margin(rasterize_uv(mesh, whole.width, whole.height), mesh, whole, value, noise);
+}
 
 const char* bake_status_name(BakeStatus status) {
     switch (status) {

@@ -53,7 +53,23 @@ struct BakeSettings {
     // equal samples in most hard cases but not at equal time (the choice and
     // the costlier draws it favours; bench/results/hard_cases_allocation_gain.txt).
     bool allocate_samples = false;
+    // Lightmaps: bake only tiles [first_tile, first_tile + tile_count) of the
+    // bake's kBakeTile² tiles, in row-major order (tile_count 0: all). Every
+    // texel's draws are fixed by its index and the seed, so the texels of a
+    // tile range come out with the same bits as in a whole bake; the rest
+    // stay 0 (mask 0), and the margin is left to fill_bake_margin once the
+    // ranges are put together (a farm bakes ranges on many machines).
+    std::size_t first_tile = 0, tile_count = 0;
 };
+
+// The side of a bake's square tiles, in texels (lightmaps; vertex bakes take
+// kBakeTile² points a tile).
+constexpr int kBakeTile = 16;
+// How many tiles a lightmap bake of width × height has.
+inline std::size_t bake_tile_count(int width, int height) {
+    return std::size_t((width + kBakeTile - 1) / kBakeTile) *
+           std::size_t((height + kBakeTile - 1) / kBakeTile);
+}
 
 struct BakeStats {
     BakeStatus status = BakeStatus::Complete;
@@ -108,5 +124,11 @@ using BakeProgress = std::function<bool(double)>;
 // id out of range, ...). A cancelled bake returns with status Cancelled.
 BakeResult bake(const Scene& scene, const BakeSettings& settings,
                 const BakeProgress& progress = nullptr);
+
+// A lightmap put together from tile ranges' values and noise (each texel
+// from the range that baked it), width·height·3 and width·height: fills the
+// margin around the UV islands of settings' mesh as a whole bake does.
+void fill_bake_margin(const Scene& scene, const BakeSettings& settings, float* value,
+                      float* noise);
 
 }  // namespace omis

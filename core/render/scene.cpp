@@ -58,6 +58,10 @@ const Receiver& Scene::mesh_receiver(std::uint32_t mesh) const {
     return mesh < receivers_.size() ? receivers_[mesh] : lambert;
 }
 
+void Scene::set_mesh_name(std::uint32_t mesh, const std::string& name) {
+    geometry_.set_mesh_name(mesh, name);
+}
+
 void Scene::set_mesh_lights(bool on) {
     if (committed_) throw std::logic_error("scene: already committed; set mesh lights before commit");
     mesh_lights_ = on;

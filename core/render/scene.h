@@ -49,6 +49,9 @@ public:
     // bench_emitters.cpp): relative variance a sample 0.36 -> ~0.01 at a
     // fraction of the time (one closest hit, no light tree).
     void set_mesh_lights(bool on);
+    bool mesh_lights_enabled() const { return mesh_lights_; }
+    // A mesh's name (errors, snapshots, the command line's --mesh); any time.
+    void set_mesh_name(std::uint32_t mesh, const std::string& name);
     static constexpr std::size_t kMeshLightTriangles = 64;
     static constexpr std::size_t kMostMeshLights = 8;
     static constexpr double kMeshLightFill = 0.75;

@@ -395,6 +395,13 @@ std::uint32_t GeometryScene::add_mesh(const std::vector<Vec3>& positions,
     return add_mesh(in);
 }
 
+void GeometryScene::set_mesh_name(std::uint32_t id, const std::string& name) {
+    if (id >= meshes_.size())
+        throw std::invalid_argument("mesh: id " + std::to_string(id) + " is out of range (" +
+                                    std::to_string(meshes_.size()) + " meshes)");
+    meshes_[id].name = name;
+}
+
 void GeometryScene::commit() {
     rtcCommitScene(scene_);
     device_->check();

@@ -219,6 +219,8 @@ public:
     std::size_t num_meshes() const { return meshes_.size(); }
     const Mesh& mesh(std::uint32_t id) const;
     const std::vector<Mesh>& meshes() const { return meshes_; }
+    // Names a mesh (names appear in errors and let callers find meshes).
+    void set_mesh_name(std::uint32_t id, const std::string& name);
     // Every non-degenerate triangle of every emissive mesh.
     std::vector<EmissiveTriangle> emissive_triangles() const;
 

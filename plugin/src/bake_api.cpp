@@ -87,6 +87,8 @@ OMIS_API void omisSetBakeInt(OMISBake bake, const char* name, int64_t value) {
         else if (key == "smoothNormals") s.smooth_normals = value != 0;
         else if (key == "threads") s.threads = to_int(value, "threads", 0, 1 << 16);
         else if (key == "roundsPerPass") s.rounds_per_pass = to_int(value, "roundsPerPass", 1, 1 << 20);
+        else if (key == "firstTile") s.first_tile = std::size_t(to_int(value, "firstTile", 0, 1 << 30));
+        else if (key == "tileCount") s.tile_count = std::size_t(to_int(value, "tileCount", 0, 1 << 30));
         else throw std::invalid_argument("name: unknown integer bake parameter '" + key + "'");
     });
 }
@@ -202,6 +204,14 @@ OMIS_API void omisCommitBake(OMISBake bake) {
         if (s.target == omis::BakeTarget::Lightmap && !scene.geometry().mesh(s.mesh).has_uvs())
             throw std::invalid_argument("mesh: '" + scene.geometry().mesh(s.mesh).name +
                                         "' has no UV map to bake into");
+        if (s.first_tile > 0 || s.tile_count > 0) {
+            if (s.target != omis::BakeTarget::Lightmap)
+                throw std::invalid_argument("firstTile, tileCount: tile ranges are for lightmaps only");
+            const std::size_t tiles = omis::bake_tile_count(s.width, s.height);
+            if (s.first_tile >= tiles || s.tile_count > tiles - s.first_tile)
+                throw std::invalid_argument("firstTile, tileCount: the range is outside the " +
+                                            std::to_string(tiles) + " tiles of the lightmap");
+        }
         b->committed = true;
     });
 }
@@ -384,5 +394,44 @@ OMIS_API bool omisWriteBakeResultPNG(OMISBakeResult result, const char* path, co
         settings.exposure = exposure;
         omis::write_png(checked(path, "path"), r.width, r.height, r.value.data(), settings);
         return true;
+    });
+}
+
+OMIS_API size_t omisGetBakeTileCount(OMISBake bake) {
+    return guarded<size_t>(0, [&] {
+        auto* b = checked(bake, "bake");
+        if (!b->committed)
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           "bake: not committed (call omisCommitBake first)");
+        if (b->settings.target != omis::BakeTarget::Lightmap)
+            throw std::invalid_argument("bake: tiles are counted for lightmaps only");
+        return omis::bake_tile_count(b->settings.width, b->settings.height);
+    });
+}
+
+OMIS_API OMISBakeResult omisComposeBakeResult(OMISBake bake, const float* value,
+                                              const float* noise, const float* mask) {
+    return guarded<OMISBakeResult>(nullptr, [&] {
+        auto* b = checked(bake, "bake");
+        if (!b->committed)
+            throw ApiError(OMIS_ERROR_INVALID_OPERATION,
+                           "bake: not committed (call omisCommitBake first)");
+        const omis::BakeSettings& s = b->settings;
+        if (s.target != omis::BakeTarget::Lightmap)
+            throw std::invalid_argument("bake: results are composed for lightmaps only");
+        ScopedRetain hold(b);
+        const std::size_t n = std::size_t(s.width) * std::size_t(s.height);
+        auto result = std::make_unique<OMISBakeResultImpl>();
+        omis::BakeResult& r = result->result;
+        r.width = s.width;
+        r.height = s.height;
+        r.value.assign(checked(value, "value"), value + 3 * n);
+        r.noise.assign(checked(noise, "noise"), noise + n);
+        r.mask.assign(checked(mask, "mask"), mask + n);
+        r.samples.assign(n, 0);
+        r.stats.texels = n;
+        for (float m : r.mask) r.stats.covered += m > 0;
+        omis::fill_bake_margin(b->scene->committed_scene("bake"), s, r.value.data(), r.noise.data());
+        return result.release();
     });
 }

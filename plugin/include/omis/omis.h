@@ -38,13 +38,16 @@
  *          omisCommitDirectLighting, omisExecuteDirectLighting).
  *   0.2.1: omisGetBakeResultWork (OMISBakeWork: draws, drawsPerTexel,
  *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules.
- *   0.2.2: omisGetBakeResultBuriedTexels; omisSetWorldImage, omisSetWorldImageFile
- *          (image-based worlds). */
+ *   0.3.0: omisGetBakeResultBuriedTexels (texels inside other objects);
+ *          omisSetWorldImage, omisSetWorldImageFile (image-based worlds);
+ *          scene snapshots (omisSaveScene, omisLoadScene, ...), mesh names,
+ *          tile-range bakes ("firstTile", "tileCount", omisGetBakeTileCount,
+ *          omisComposeBakeResult). */
 #define OMIS_VERSION_MAJOR 0
-#define OMIS_VERSION_MINOR 2
-#define OMIS_VERSION_PATCH 2
+#define OMIS_VERSION_MINOR 3
+#define OMIS_VERSION_PATCH 0
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
-#define OMIS_VERSION_STRING "0.2.2"
+#define OMIS_VERSION_STRING "0.3.0"
 
 /* Limits of every MIS system: techniques combined, channels per sample. */
 #define OMIS_MAX_TECHNIQUES 32
@@ -257,6 +260,35 @@ OMIS_API void omisSetMeshReceiver(OMISScene scene, unsigned int mesh, OMISReceiv
  * commit does nothing. */
 OMIS_API void omisCommitScene(OMISScene scene);
 
+/* ---- Scene snapshots and mesh names ------------------------------------- */
+
+/* A snapshot is a file of everything a bake reads from a scene (meshes and
+ * their names, UVs, normals, emission and receivers; lights and their flags;
+ * the world; scene options), versioned and checksummed: a scene loaded from
+ * it is committed and bakes the same bits as the scene saved. Saving works
+ * before or after commit; the file is written atomically (temporary file,
+ * then rename). Returns false on error. */
+OMIS_API bool omisSaveScene(OMISScene scene, const char* path);
+/* The snapshot as bytes: writes it to buffer when bufferSize is large enough
+ * and returns its size either way (0 on error), so a call with bufferSize 0
+ * queries the size. */
+OMIS_API size_t omisSaveSceneToMemory(OMISScene scene, void* buffer, size_t bufferSize);
+/* A new committed scene (count 1) from a snapshot file or bytes; NULL on
+ * error. A truncated or corrupted file (checksums), another format version or
+ * counts that do not fit the file give OMIS_ERROR_INVALID_ARGUMENT with a
+ * message naming the problem. The bytes are read during the call only. */
+OMIS_API OMISScene omisLoadScene(const char* path);
+OMIS_API OMISScene omisLoadSceneFromMemory(const void* data, size_t size);
+/* Names a mesh (any time; names appear in errors and snapshots). */
+OMIS_API void omisSetMeshName(OMISScene scene, unsigned int mesh, const char* name);
+/* The first mesh of that name, or OMIS_INVALID_ID (an error) when none is. */
+OMIS_API unsigned int omisFindMesh(OMISScene scene, const char* name);
+/* A mesh's name, written and sized as omisGetEffectPlan. */
+OMIS_API size_t omisGetMeshName(OMISScene scene, unsigned int mesh, char* buffer,
+                                size_t bufferSize);
+/* How many meshes the scene holds (OMIS_INVALID_ID on error). */
+OMIS_API unsigned int omisGetMeshCount(OMISScene scene);
+
 /* Techniques (SPEC §3) are named in one comma-separated string, for example
  * "bsdf,unoccluded/solid-angle"; `samples` then holds one count per name
  * (samples per round, >= 0). NULL or "" chooses the effect plan's default
@@ -369,7 +401,12 @@ OMIS_API void omisReleaseBake(OMISBake bake);
  *             "samples" [64] sample budget: directions per texel in all,
  *             "seed" [0], "smoothNormals" [1], "roundsPerPass" [4] (passes are
  *             used when a time or noise budget is set), "threads" [0 = all
- *             cores; results do not depend on it]
+ *             cores; results do not depend on it]; lightmaps: "firstTile" [0]
+ *             and "tileCount" [0 = all]: bake only these tiles of
+ *             omisGetBakeTileCount's (16×16 texels each, row-major from the
+ *             bottom left): their texels get the bits a whole bake gives them,
+ *             the rest stay 0 with mask 0, and the margin is left unfilled
+ *             (omisComposeBakeResult fills it once the ranges are together)
  *   floats:   "timeBudget" [0 = none] seconds, "noiseTarget" [0 = none]
  *             relative standard error per texel, "beta" [2], "cutoff" [0.1]
  *   strings:  "techniques" [""] comma-separated names (SPEC §3), "" = the
@@ -392,6 +429,15 @@ OMIS_API void omisCommitBake(OMISBake bake);
 /* Runs the bake; returns a new result (count 1), or NULL on error or when
  * cancelled (OMIS_ERROR_CANCELLED). Nothing is written anywhere. */
 OMIS_API OMISBakeResult omisExecuteBake(OMISBake bake);
+/* How many tiles a committed lightmap bake has (0 on error). */
+OMIS_API size_t omisGetBakeTileCount(OMISBake bake);
+/* A result put together from tile-range bakes of this (committed, lightmap)
+ * bake: value (width·height·3 floats), noise and mask (width·height floats
+ * each), every texel taken from the range that baked it; the margin is
+ * filled as a whole bake fills it. The arrays are read during the call only.
+ * Its statistics hold texels and covered only. */
+OMIS_API OMISBakeResult omisComposeBakeResult(OMISBake bake, const float* value,
+                                              const float* noise, const float* mask);
 
 OMIS_API void omisRetainBakeResult(OMISBakeResult result);
 OMIS_API void omisReleaseBakeResult(OMISBakeResult result);
@@ -439,7 +485,7 @@ OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work);
 /* Baked texels (corners, in vertex bakes) whose centre lies inside other
  * geometry (rays from it meet the back of a surface first) or on a face of
  * another mesh turned its way (coinciding surfaces). They bake dark, as in
- * Cycles; an artist usually wants to know (overlapping props). 0.2.2; 0 on
+ * Cycles; an artist usually wants to know (overlapping props). 0.3.0; 0 on
  * error (omisGetError). */
 OMIS_API uint64_t omisGetBakeResultBuriedTexels(OMISBakeResult result);
 
