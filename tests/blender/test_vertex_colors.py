@@ -68,7 +68,9 @@ def compare(label, build, max_dark_fraction, cycles_samples, omis_samples):
 
     stats = omis_bake.bake(bpy.context, objects=[ob], target='COLOR_ATTRIBUTES',
                            samples=omis_samples, seed=3)
-    U.check(not stats["warnings"], f"{label}: unexpected warnings {stats['warnings']}")
+    # Corners where walls meet the floor lie on the walls' faces: reported, and
+    # baked dark as Cycles bakes them; nothing else may warn.
+    U.check(not U.unexpected_warnings(stats), f"{label}: unexpected warnings {stats['warnings']}")
     o = attribute(ob, "baked")
     # The bake's mean relative error stands in for each vertex's own (the
     # statistics are per bake, not per vertex).
