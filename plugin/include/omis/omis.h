@@ -38,16 +38,16 @@
  *          omisCommitDirectLighting, omisExecuteDirectLighting).
  *   0.2.1: omisGetBakeResultWork (OMISBakeWork: draws, drawsPerTexel,
  *          shadowedTexels); OMISBakeStats.samples counts the texels' schedules.
- *   0.3.0: omisGetBakeResultBuriedTexels (texels inside other objects);
+ *   0.2.2: omisGetBakeResultBuriedTexels (texels inside other objects);
  *          omisSetWorldImage, omisSetWorldImageFile (image-based worlds);
  *          scene snapshots (omisSaveScene, omisLoadScene, ...), mesh names,
  *          tile-range bakes ("firstTile", "tileCount", omisGetBakeTileCount,
  *          omisComposeBakeResult). */
 #define OMIS_VERSION_MAJOR 0
-#define OMIS_VERSION_MINOR 3
-#define OMIS_VERSION_PATCH 0
+#define OMIS_VERSION_MINOR 2
+#define OMIS_VERSION_PATCH 2
 #define OMIS_VERSION (OMIS_VERSION_MAJOR * 10000 + OMIS_VERSION_MINOR * 100 + OMIS_VERSION_PATCH)
-#define OMIS_VERSION_STRING "0.3.0"
+#define OMIS_VERSION_STRING "0.2.2"
 
 /* Limits of every MIS system: techniques combined, channels per sample. */
 #define OMIS_MAX_TECHNIQUES 32
@@ -485,7 +485,7 @@ OMIS_API bool omisGetBakeResultWork(OMISBakeResult result, OMISBakeWork* work);
 /* Baked texels (corners, in vertex bakes) whose centre lies inside other
  * geometry (rays from it meet the back of a surface first) or on a face of
  * another mesh turned its way (coinciding surfaces). They bake dark, as in
- * Cycles; an artist usually wants to know (overlapping props). 0.3.0; 0 on
+ * Cycles; an artist usually wants to know (overlapping props). 0.2.2; 0 on
  * error (omisGetError). */
 OMIS_API uint64_t omisGetBakeResultBuriedTexels(OMISBakeResult result);
 
