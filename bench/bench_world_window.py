@@ -13,33 +13,12 @@ Usage: PYTHONPATH=build/python python3 bench/bench_world_window.py [--seeds 8]
        [--samples 16] [--grid 24]
 """
 import argparse
-import math
 import time
 
 import numpy as np
 
 import omis
-
-
-def sky_image(width=1024, height=512, sun_elevation=30.0, sun_azimuth=0.0, sun_diameter=0.5,
-              sun_radiance=3.0e5):
-    """Rows top first, Cycles' convention: texel centres' directions, a gradient
-    above the horizon, a dim ground, and a sun disc (texels whose centre lies
-    inside it) toward (elevation, azimuth) in degrees."""
-    u = (np.arange(width) + 0.5) / width
-    v = 1 - (np.arange(height) + 0.5) / height
-    phi = math.pi * (1 - 2 * u)[None, :]
-    theta = math.pi * (1 - v)[:, None]
-    d = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
-                                     np.cos(theta)), axis=-1)
-    z = d[..., 2:3]
-    sky = np.where(z > 0, (1 - z) * np.array([0.6, 0.8, 1.0]) + z * np.array([0.2, 0.35, 0.8]),
-                   np.array([0.08, 0.07, 0.06]))
-    el, az = math.radians(sun_elevation), math.radians(sun_azimuth)
-    sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    inside = d @ sun >= math.cos(math.radians(sun_diameter / 2))
-    sky[inside] = sun_radiance * np.array([1.0, 0.95, 0.9])
-    return sky.astype(np.float32), sun
+from omis import demo
 
 
 def quad(a, b, c, d):
@@ -88,7 +67,7 @@ def main():
     ap.add_argument("--reference-samples", type=int, default=4096)
     ap.add_argument("--open", action="store_true", help="no room: the floor under the open sky")
     args = ap.parse_args()
-    image, sun = sky_image()
+    image, sun = demo.sky()
     points, normals = floor_points(args.grid)
     scenes = {}
     for compensate in (False, True):

@@ -4,6 +4,8 @@ that shadows the floor. The floor carries the UV map that is baked.
 
 Units are metres; light radiance in W/(m² sr).
 """
+import math
+
 import numpy as np
 
 
@@ -63,3 +65,26 @@ def build_scene(omis_module):
                          radiance=(24.0, 18.0, 12.0))
     scene.commit()
     return scene, floor, "room 6×6 m: table under a ceiling light, a wall light and a cabinet"
+
+
+def sky(width=1024, height=512, sun_elevation=30.0, sun_azimuth=0.0, sun_diameter=0.5,
+        sun_radiance=3.0e5):
+    """A procedural equirectangular HDR sky for image-world tests and benchmarks
+    (nothing downloaded): a blue gradient above the horizon, a dim ground and a
+    sun disc (texels whose centre lies inside it) toward (elevation, azimuth) in
+    degrees. Returns (rgb (height, width, 3) float32, rows top first, in Cycles'
+    convention u = 0.5 − atan2(y, x)/2π, v = 1 − acos(z)/π; the sun's unit direction)."""
+    u = (np.arange(width) + 0.5) / width
+    v = 1 - (np.arange(height) + 0.5) / height
+    phi = math.pi * (1 - 2 * u)[None, :]
+    theta = math.pi * (1 - v)[:, None]
+    d = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
+                                     np.cos(theta)), axis=-1)
+    z = d[..., 2:3]
+    rgb = np.where(z > 0, (1 - z) * np.array([0.6, 0.8, 1.0]) + z * np.array([0.2, 0.35, 0.8]),
+                   np.array([0.08, 0.07, 0.06]))
+    el, az = math.radians(sun_elevation), math.radians(sun_azimuth)
+    sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    rgb[d @ sun >= math.cos(math.radians(sun_diameter / 2))] = sun_radiance * np.array(
+        [1.0, 0.95, 0.9])
+    return rgb.astype(np.float32), sun

@@ -100,25 +100,12 @@ def constant_world(name="World", color=None, strength=1.0):
 
 def sky_image(name="sky", width=512, sun_elevation=35.0, sun_azimuth=-20.0, sun_diameter=3.0,
               sun_radiance=2000.0):
-    """A procedural equirectangular HDR sky (nothing downloaded): a blue gradient
-    above the horizon, a dim ground and a small, very bright sun disc toward
-    (elevation, azimuth) in degrees, as a float Blender image (rows bottom first,
-    Cycles' convention: u = 0.5 - atan2(y, x)/2π, v = 1 - acos(z)/π)."""
+    """omis.demo.sky (a procedural HDR sky with a small, very bright sun toward
+    (elevation, azimuth) in degrees) as a float Blender image, rows bottom first."""
     import numpy as np
+    from omis import demo
     height = width // 2
-    u = (np.arange(width) + 0.5) / width
-    v = (np.arange(height) + 0.5) / height  # bottom row first
-    phi = math.pi * (1 - 2 * u)[None, :]
-    theta = math.pi * (1 - v)[:, None]
-    d = np.stack(np.broadcast_arrays(np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi),
-                                     np.cos(theta)), axis=-1)
-    z = d[..., 2:3]
-    rgb = np.where(z > 0, (1 - z) * np.array([0.6, 0.8, 1.0]) + z * np.array([0.2, 0.35, 0.8]),
-                   np.array([0.08, 0.07, 0.06]))
-    el, az = math.radians(sun_elevation), math.radians(sun_azimuth)
-    sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    rgb[d @ sun >= math.cos(math.radians(sun_diameter / 2))] = sun_radiance * np.array(
-        [1.0, 0.95, 0.9])
+    rgb = demo.sky(width, height, sun_elevation, sun_azimuth, sun_diameter, sun_radiance)[0][::-1]
     img = bpy.data.images.new(name, width, height, float_buffer=True, alpha=True)
     rgba = np.concatenate([rgb, np.ones((height, width, 1))], axis=-1).astype(np.float32)
     img.pixels.foreach_set(rgba.ravel())

@@ -20,6 +20,7 @@
 #include "render/direct_lighting.h"
 #include "render/effect_plan.h"
 #include "sampling/irradiance.h"
+#include "support/point_copies.h"
 
 using namespace omis;
 
@@ -64,13 +65,10 @@ double exact_share(const NearLamp& l) {
     return polygon_irradiance(l.x, up, rim) / kPi;
 }
 
-struct Estimate {
-    double mean = 0, se = 0, mean_reported_sd = 0;
-};
-
-Estimate estimate(const NearLamp& l, const std::vector<std::string>& techniques,
-                  const std::vector<int>& samples, int rounds, Strategy strategy,
-                  std::uint64_t seed) {
+// 64 copies of the lamp's receiver: their mean, spread and reported σ.
+testing::PointCopies estimate(const NearLamp& l, const std::vector<std::string>& techniques,
+                              const std::vector<int>& samples, int rounds, Strategy strategy,
+                              std::uint64_t seed) {
     const double L = 1.0;
     Scene scene;
     scene.add_light(make_ellipse_light(l.centre, l.a, l.b, {L, L, L}, false, kPi));
@@ -85,24 +83,7 @@ Estimate estimate(const NearLamp& l, const std::vector<std::string>& techniques,
     s.rounds = rounds;
     s.strategy = strategy;
     s.seed = seed;
-    const int copies = 64;
-    std::vector<double> points, normals, value(3 * copies), variance(3 * copies);
-    for (int i = 0; i < copies; ++i) {
-        points.insert(points.end(), {l.x.x, l.x.y, l.x.z});
-        normals.insert(normals.end(), {0.0, 0.0, 1.0});
-    }
-    direct_lighting(scene, points.data(), normals.data(), copies, s, value.data(),
-                    variance.data());
-    Estimate e;
-    for (int i = 0; i < copies; ++i) {
-        e.mean += value[3 * i + 1] / copies;
-        e.mean_reported_sd += std::sqrt(variance[3 * i + 1]) / copies;
-    }
-    double var = 0;
-    for (int i = 0; i < copies; ++i)
-        var += (value[3 * i + 1] - e.mean) * (value[3 * i + 1] - e.mean) / (copies - 1);
-    e.se = std::sqrt(var / copies);
-    return e;
+    return testing::light_point_copies(scene, l.x, {0, 0, 1}, s, 64);
 }
 
 }  // namespace
@@ -144,13 +125,13 @@ TEST_CASE("near disks and ellipses: every sampler and the default plan meet the 
             for (const std::string& t : r.techniques) label += t + " ";
             INFO(l.name << ", " << label << strategy_name(r.strategy) << ", " << r.rounds
                         << " rounds");
-            const Estimate e = estimate(l, r.techniques, r.samples, r.rounds, r.strategy, seed++);
-            INFO("estimate " << e.mean << " ± " << e.se << " (reported σ per copy "
-                             << e.mean_reported_sd << "), exact " << exact);
-            CHECK(std::abs(e.mean - exact) <= 5 * e.se + 1e-3 * exact);
+            const testing::PointCopies e = estimate(l, r.techniques, r.samples, r.rounds, r.strategy, seed++);
+            INFO("estimate " << e.mean << " ± " << e.standard_error << " (reported σ per copy "
+                             << e.reported_sd << "), exact " << exact);
+            CHECK(std::abs(e.mean - exact) <= 5 * e.standard_error + 1e-3 * exact);
             // Not the whole hemisphere: no copy's reported error is 0 unless
             // its estimate is exact.
-            CHECK((e.mean_reported_sd > 0 || std::abs(e.mean - exact) <= 1e-9));
+            CHECK((e.reported_sd > 0 || std::abs(e.mean - exact) <= 1e-9));
         }
     }
 }
