@@ -40,8 +40,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
       context_(scene, settings_.lighting),
       budget_(plan_samples(context_, settings_.samples, settings_.lighting.rounds)),
       progressive_(settings_.time_budget > 0 || settings_.noise_target > 0),
-      state_(layout_.count),
-      tallies_(settings_.lighting.streams > 1 ? layout_.count : 0),
+      means_(layout_, settings_.lighting.streams > 1, settings_.noise_target, result_.value),
       shaders_([this] { return PointLighting(context_); }) {
     result_.width = layout_.width;
     result_.height = layout_.height;
@@ -50,12 +49,9 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     // Corners on another mesh's face: moved behind it (on_contact).
     for (std::size_t i = 0; i < layout_.points.size(); ++i)
         layout_.points[i] = on_contact(layout_.points[i], std::uint32_t(i / 3), &contacts_);
-    // Uncovered texels are never shaded: they count as done for the noise target.
+    // Progress counts the covered points' samples (the others are never shaded).
     std::size_t to_shade = 0;
-    for (std::size_t i = 0; i < layout_.count; ++i) {
-        if (!layout_.covered(i)) state_[i].done = true;
-        to_shade += layout_.covered(i);
-    }
+    for (std::size_t i = 0; i < layout_.count; ++i) to_shade += layout_.covered(i);
     const long long samples_per_point =
         (long long)budget_.full_rounds * budget_.per_round + budget_.last_samples;
     total_work_ = double(std::max<std::size_t>(1, to_shade)) *
@@ -124,10 +120,10 @@ bool Baker::keep_going() {
 
 void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                         std::vector<Shaded>& out) {
-    if (!layout_.covered(i) || state_[i].done || cancel_.load(std::memory_order_relaxed)) return;
+    if (!layout_.covered(i) || means_.state(i).done || cancel_.load(std::memory_order_relaxed)) return;
     Shaded r{i, {}, 0, {}, 1};
     double variance[3], own[3];
-    StreamEstimates* streams = tallies_.empty() ? nullptr : &r.streams;
+    StreamEstimates* streams = !means_.streams() ? nullptr : &r.streams;
     // The first pass times its set-up and sampling on every
     // kSetupTimingStride-th point only: clock reads at every point cost ~5 %
     // of a one-round pass (four then, six now), and time_pass needs only the
@@ -162,7 +158,7 @@ void Baker::run_pass(const Pass& pass) {
         for (std::size_t tile = range.begin(); tile != range.end(); ++tile) {
             if (cancel_.load(std::memory_order_relaxed)) return;
             shaded_tile.clear();
-            accumulate(shade_tile(shader, tile, pass, shaded_tile), shaded_tile);
+            means_.accumulate(shade_tile(shader, tile, pass, shaded_tile), shaded_tile);
         }
     });
 }

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-#include "bake/baker.h"
 
 namespace omis::bake_detail {
 
@@ -23,7 +22,7 @@ double relative_error(const PointState& s, const float* mean) {
 // for correlated draws); with several streams, scaled by the tile's ratio of
 // the streams' spread to it (many degrees of freedom once pooled over the
 // tile), or the point's own streams' spread where that is larger.
-void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
+void RunningMeans::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
     std::vector<double>& spread = spread_scratch_.local();
     spread.assign(tile.size(), -1);
     double sum_spread = 0, sum_own = 0;
@@ -36,7 +35,7 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
         const double w = pass.weight > 0 ? pass.weight : double(pass.samples);
         s.mean_weight += w;
         const double weight = w / s.mean_weight;
-        float* mean = &result_.value[3 * r.i];
+        float* mean = &values_[3 * r.i];
         for (int c = 0; c < 3; ++c)  // a mean past the float range stays infinite
             if (!std::isinf(mean[c])) mean[c] += float((r.value[c] - mean[c]) * weight);
         s.own_sum += w * w * r.own_variance;
@@ -64,37 +63,39 @@ void Baker::accumulate(const Pass& pass, const std::vector<Shaded>& tile) {
         // A point whose samples all agreed (nothing seen yet, typically a
         // shadowed texel that rare samples light) gives no error estimate:
         // it is not done, but keeps sampling while others still need to.
-        if (settings_.noise_target > 0 && s.passes >= kMinPassesForNoiseTarget &&
-            s.variance > 0 && relative_error(s, &result_.value[3 * tile[t].i]) <=
-                                  settings_.noise_target)
+        if (noise_target_ > 0 && s.passes >= kMinPassesForNoiseTarget &&
+            s.variance > 0 && relative_error(s, &values_[3 * tile[t].i]) <=
+                                  noise_target_)
             s.done = true;
     }
 }
 
-// The probe pass's estimates leave the running means, the error tallies and
-// the sample count (the next pass's estimates replace them).
-void Baker::forget_probe() {
-    replace_probe_ = false;
-    net_end_luminance_.clear();
-    rate_.reset();
-    for (std::size_t i = 0; i < layout_.count; ++i) {
-        if (!layout_.covered(i)) continue;
-        replaced_draws_ += std::uint64_t(state_[i].weight) * state_[i].draws_per_count;
-        state_[i] = PointState{};
-        if (!tallies_.empty()) tallies_[i] = StreamTally{};
-        for (int c = 0; c < 3; ++c) result_.value[3 * i + c] = 0.f;
-    }
+RunningMeans::RunningMeans(const BakeLayout& layout, bool streams, double noise_target,
+                           std::vector<float>& values)
+    : layout_(layout), noise_target_(noise_target), values_(values), state_(layout.count),
+      tallies_(streams ? layout.count : 0) {
+    for (std::size_t i = 0; i < layout_.count; ++i)
+        if (!layout_.covered(i)) state_[i].done = true;
 }
 
-// The bake's convergence after a pass (convergence.h): what the running means
-// have reached, and when.
-void Baker::record_pass(double sampling_start, bool tail) {
-    const double seconds = elapsed() - sampling_start;
+std::uint64_t RunningMeans::forget() {
+    std::uint64_t draws = 0;
+    for (std::size_t i = 0; i < layout_.count; ++i) {
+        if (!layout_.covered(i)) continue;
+        draws += std::uint64_t(state_[i].weight) * state_[i].draws_per_count;
+        state_[i] = PointState{};
+        if (!tallies_.empty()) tallies_[i] = StreamTally{};
+        for (int c = 0; c < 3; ++c) values_[3 * i + c] = 0.f;
+    }
+    return draws;
+}
+
+BakePassRecord RunningMeans::record(double seconds, bool tail) const {
     double sum_error = 0, sum_samples = 0;
     std::size_t covered = 0;
     for (std::size_t i = 0; i < layout_.count; ++i) {
         if (!layout_.covered(i)) continue;
-        sum_error += relative_error(state_[i], &result_.value[3 * i]);
+        sum_error += relative_error(state_[i], &values_[3 * i]);
         sum_samples += state_[i].weight;
         ++covered;
     }
@@ -103,7 +104,14 @@ void Baker::record_pass(double sampling_start, bool tail) {
     r.samples_per_texel = covered ? sum_samples / double(covered) : 0;
     r.mean_relative_error = covered ? sum_error / double(covered) : 0;
     r.tail = tail;
-    result_.stats.convergence.push_back(r);
+    return r;
+}
+
+bool RunningMeans::noise_target_met() const {
+    return noise_target_ > 0 &&
+           std::all_of(state_.begin(), state_.end(), [&](const PointState& s) {
+               return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance == 0);
+           });
 }
 
 }  // namespace omis::bake_detail

@@ -2,9 +2,14 @@
 // weighted by samples, with the statistics their noise is estimated from.
 #pragma once
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <vector>
+
+#include "bake/bake_layout.h"
+#include "bake/convergence.h"
 
 #include "render/direct_lighting.h"
 
@@ -80,6 +85,31 @@ struct StreamTally {
             }
         return spread / ((used - 1) * total);
     }
+};
+
+// The running means of a bake's points and their statistics: the means live
+// in the result's values (3 floats a point), the rest here.
+class RunningMeans {
+public:
+    // Uncovered points are never shaded: they count as done for the noise target.
+    RunningMeans(const BakeLayout& layout, bool streams, double noise_target,
+                 std::vector<float>& values);
+    const PointState& state(std::size_t i) const { return state_[i]; }
+    bool streams() const { return !tallies_.empty(); }
+    void accumulate(const Pass& pass, const std::vector<Shaded>& tile);
+    // Every covered point back to no samples; returns the draws they held.
+    std::uint64_t forget();
+    // Samples and mean relative error over the covered points.
+    BakePassRecord record(double seconds, bool tail) const;
+    bool noise_target_met() const;
+
+private:
+    const BakeLayout& layout_;
+    const double noise_target_;
+    std::vector<float>& values_;
+    std::vector<PointState> state_;
+    std::vector<StreamTally> tallies_;  // per point, when the bake has several streams
+    tbb::enumerable_thread_specific<std::vector<double>> spread_scratch_;  // accumulate's
 };
 
 }  // namespace omis::bake_detail

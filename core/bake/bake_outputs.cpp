@@ -23,9 +23,9 @@ void Baker::write_outputs() {
     double sum_error = 0, sum_passes = 0;
     std::size_t n_covered = 0;
     for (std::size_t i = 0; i < count; ++i) {
-        result_.samples[i] = state_[i].weight;
+        result_.samples[i] = means_.state(i).weight;
         if (!layout_.covered(i)) continue;
-        const PointState& s = state_[i];
+        const PointState& s = means_.state(i);
         const double err = relative_error(s, &result_.value[3 * i]);
         result_.noise[i] = float(err);
         result_.mask[i] = 1.f;

@@ -131,13 +131,6 @@ void Baker::record_net_end() {
     rate_.add(done_rounds_, first || !covered ? 0.0 : sum_change / double(covered));
 }
 
-bool Baker::noise_target_met() const {
-    return settings_.noise_target > 0 &&
-           std::all_of(state_.begin(), state_.end(), [&](const PointState& s) {
-               return s.done || (s.passes >= kMinPassesForNoiseTarget && s.variance == 0);
-           });
-}
-
 // A time budget's first pass where an earlier bake of the same shape measured
 // its passes (Scene::measured_pass_cost): sized by that measure
 // (measured_first_pass), in place of the one-round pass that
@@ -202,7 +195,7 @@ void Baker::run_passes() {
         next_rounds_ = int(std::min<double>(
             1 << 24, std::max<double>(later_min_rounds_, std::ceil(growth * pass.rounds))));
         if (!progressive_) next_rounds_ = budget_.full_rounds;  // after an allocation pilot
-        if (noise_target_met()) {
+        if (means_.noise_target_met()) {
             status_ = BakeStatus::NoiseTarget;
             return;
         }
@@ -235,6 +228,22 @@ void Baker::time_pass(std::uint32_t samples, double seconds) {
     first_pass_fixed_ = seconds * std::max(0.0, 1.0 - rounds / shading);
     timer_.add(samples, seconds * repeated);
     timer_.set_fixed(seconds * std::max(0.0, repeated - rounds / shading));
+}
+
+// The probe pass's estimates leave the running means, the error tallies and
+// the sample count (the next pass's estimates replace them).
+void Baker::forget_probe() {
+    replace_probe_ = false;
+    net_end_luminance_.clear();
+    rate_.reset();
+    replaced_draws_ += means_.forget();
+}
+
+// The bake's convergence after a pass (convergence.h): what the running means
+// have reached, and when.
+void Baker::record_pass(double sampling_start, bool tail) {
+    const double seconds = elapsed() - sampling_start;
+    result_.stats.convergence.push_back(means_.record(seconds, tail));
 }
 
 }  // namespace omis::bake_detail

@@ -51,7 +51,6 @@ private:
     bool keep_going();
     void shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                      std::vector<Shaded>& out);
-    void accumulate(const Pass& pass, const std::vector<Shaded>& tile);
     // The pass as the tile's points took it (an allocated tile's own rounds).
     Pass shade_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
                     std::vector<Shaded>& out);
@@ -72,7 +71,6 @@ private:
     void size_first_pass();
     void remember_pass_cost() const;
     void run_passes();
-    bool noise_target_met() const;
     void record_pass(double sampling_start, bool tail);
     void forget_probe();
     void time_pass(std::uint32_t samples, double seconds);
@@ -94,9 +92,7 @@ private:
     SampleBudget budget_;
     bool progressive_;
     BakeResult result_;
-    std::vector<PointState> state_;
-    std::vector<StreamTally> tallies_;  // per point, when settings_.lighting.streams > 1
-    tbb::enumerable_thread_specific<std::vector<double>> spread_scratch_;  // accumulate's
+    RunningMeans means_;
     tbb::enumerable_thread_specific<PointLighting> shaders_;
 
     // Progress counts shaded samples; cancel is checked at every point so a
