@@ -98,7 +98,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     }
     if (allocate_) {
         probe_ = false;  // the first pass is the allocation's pilot, not replaced
-        tiles_.resize(layout_.tiles);
+        allocation_.start(layout_.tiles, budget_.per_round, context_.techniques.size());
         // A bake of a sample budget: a quarter of it is the pilot, the rest one pass.
         if (!progressive_) next_rounds_ = std::max(1, budget_.full_rounds / 4);
     }
@@ -169,7 +169,7 @@ BakeResult Baker::run() {
     write_outputs();
     fill_margin();
     fill_stats();
-    fill_allocation_stats();
+    if (allocate_) allocation_.describe(result_.stats, settings_.lighting);
     return std::move(result_);
 }
 

@@ -16,12 +16,12 @@ Pass Baker::shade_tile(PointLighting& shader, std::size_t tile, const Pass& pass
         layout_.tile_points(tile, [&](std::size_t i) { shade_point(shader, i, pass, out); });
         return pass;
     }
-    TileAllocation& t = tiles_[tile];
+    TileAllocation& t = allocation_.tile(tile);
     if (t.shares.empty()) {
         pilot_tile(shader, tile, pass, out);
         return pass;
     }
-    Pass allocated = allocated_pass(t, pass);
+    Pass allocated = allocation_.allocated_pass(t, pass);
     layout_.tile_points(tile, [&](std::size_t i) { shade_point(shader, i, allocated, out); });
     t.drawn.push_back({allocated.first_round, allocated.rounds, allocated.counts});
     t.next_round += allocated.rounds;
@@ -52,11 +52,16 @@ void Baker::pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass
         if (record) pilot.end_point(value > 0 && std::isfinite(value) ? 1 / value : 0.0,
                                     out.size() > before ? pass.rounds : 0);
     });
+    allocation_.end_pilot(tile, pilot, counts, pass);
+}
+
+void SampleAllocation::end_pilot(std::size_t tile, const AllocationPilot& pilot,
+                                 const std::vector<int>& counts, const Pass& pass) {
     TileAllocation& t = tiles_[tile];
     t.shares.assign(counts.begin(), counts.end());  // the pilot's own split
     if (pilot.rounds() > 0 && pilot.samples() > 0) {
         const double floor =
-            std::min(kAllocationFloor, 0.5 / double(context_.techniques.size()));
+            std::min(kAllocationFloor, 0.5 / double(techniques_));
         t.shares = optimal_shares(pilot, pilot.cost(), floor);
     }
     t.drawn.push_back({pass.first_round, pass.rounds, pass.counts});
@@ -67,10 +72,10 @@ void Baker::pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass
 // of the tile's shares — as many rounds as keep at least kMinAllocatedRound
 // samples each, kRoundPerTechnique a technique (a pass's last partial round:
 // one round).
-Pass Baker::allocated_pass(TileAllocation& t, const Pass& pass) {
-    const int P = budget_.per_round;
+Pass SampleAllocation::allocated_pass(TileAllocation& t, const Pass& pass) {
+    const int P = per_round_;
     const int least = std::max<int>(kMinAllocatedRound,
-                                    kRoundPerTechnique * int(context_.techniques.size()));
+                                    kRoundPerTechnique * int(techniques_));
     int rounds = 1;
     if (!pass.counts) {
         int group = pass.rounds;  // settings rounds per allocated round
@@ -92,10 +97,8 @@ Pass Baker::allocated_pass(TileAllocation& t, const Pass& pass) {
 
 // What the allocation did: each technique's mean share (and range) over the
 // tiles that chose one.
-void Baker::fill_allocation_stats() {
-    BakeStats& stats = result_.stats;
-    if (!allocate_) return;
-    const std::size_t T = settings_.lighting.techniques.size();
+void SampleAllocation::describe(BakeStats& stats, const DirectLightingSettings& lighting) const {
+    const std::size_t T = lighting.techniques.size();
     std::vector<double> sum(T, 0.0), lo(T, 1.0), hi(T, 0.0);
     std::size_t n = 0;
     for (const TileAllocation& t : tiles_) {
@@ -116,7 +119,7 @@ void Baker::fill_allocation_stats() {
       << kAllocationFloor << " a technique)";
     for (std::size_t k = 0; k < T && n > 0; ++k) {
         stats.allocated_shares.push_back(sum[k] / n);
-        s << "; " << settings_.lighting.techniques[k].name() << " " << sum[k] / n << " ("
+        s << "; " << lighting.techniques[k].name() << " " << sum[k] / n << " ("
           << lo[k] << "–" << hi[k] << ")";
     }
     stats.allocation = s.str();

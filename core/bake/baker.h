@@ -56,8 +56,6 @@ private:
                     std::vector<Shaded>& out);
     void pilot_tile(PointLighting& shader, std::size_t tile, const Pass& pass,
                     std::vector<Shaded>& out);
-    Pass allocated_pass(TileAllocation& t, const Pass& pass);
-    void fill_allocation_stats();
     void run_pass(const Pass& pass);
     bool plan_pass(Pass& pass);
     bool plan_dyadic_pass(Pass& pass);
@@ -125,7 +123,7 @@ private:
 
     // Sample allocation: on for this bake, and per tile.
     bool allocate_ = false;
-    std::vector<TileAllocation> tiles_;
+    SampleAllocation allocation_;
 };
 
 }  // namespace omis::bake_detail
