@@ -39,8 +39,8 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
       shape_(bake_shape(settings_, layout_)),
       context_(scene, settings_.lighting),
       budget_(plan_samples(context_, settings_.samples, settings_.lighting.rounds)),
-      progressive_(settings_.time_budget > 0 || settings_.noise_target > 0),
       means_(layout_, settings_.lighting.streams > 1, settings_.noise_target, result_.value),
+      schedule_(scene_, settings_, context_, budget_, layout_, result_, shape_, start_),
       shaders_([this] { return PointLighting(context_); }) {
     result_.width = layout_.width;
     result_.height = layout_.height;
@@ -62,32 +62,16 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     // 128² samples=1 bake took 1.04–1.57× as long with them (budgets.txt).
     if (context_.keeps_texel_tables) context_.texel_tables.index_points(layout_.count);
 
-    // Under a time budget the first pass — the part a budget cannot cut — is
-    // a single round, so small budgets are not eaten by it; it also measures
-    // what a round costs here. The optimal strategies solve per pass, and a
-    // one-round pass falls back to balance (too few samples to fit α): its
-    // estimate, averaged in by samples, would add balance's far larger
-    // variance per sample. For them it is a probe: the result if the budget
-    // ends there, else replaced by the passes after it, which start again at
-    // round 0 (the same draws) and take rounds_per_pass or more.
-    const bool under_time = settings_.time_budget > 0;
-    const bool optimal = fits_per_pass();
-    next_rounds_ = !progressive_ ? budget_.full_rounds
-                   : under_time  ? 1
-                                 : settings_.rounds_per_pass;
-    later_min_rounds_ = under_time && optimal ? settings_.rounds_per_pass : 1;
-    probe_ = under_time && optimal && budget_.full_rounds > 1;
-    last_done_ = budget_.last.empty();
     allocate_ = settings_.allocate_samples && is_optimal(settings_.lighting.strategy) &&
                 context_.techniques.size() >= 2 && budget_.full_rounds >= 2;
-    dyadic_ = under_time && settings_.noise_target <= 0 && !allocate_;
+    schedule_.start(allocate_);
     // Points shaded in more than one pass keep where their table draws stand
     // (LightingContext::draw_counts), which a later pass continues from,
     // whether their centre is in the shadow of most of their light
     // (shadow_verdicts), the reach behind their uniform or power tables
     // (table_reach), the radius of their footprint's region (region_radii) and
     // the light tree's branching there (region_branching).
-    if (progressive_ || allocate_ || !budget_.last.empty()) {
+    if (schedule_.progressive() || allocate_ || !budget_.last.empty()) {
         context_.keep_draw_counts(layout_.count);
         context_.keep_shadow_verdicts(layout_.count);
         context_.keep_table_reach(layout_.count);
@@ -96,12 +80,7 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
             context_.keep_region_branching(layout_.count);
         }
     }
-    if (allocate_) {
-        probe_ = false;  // the first pass is the allocation's pilot, not replaced
-        allocation_.start(layout_.tiles, budget_.per_round, context_.techniques.size());
-        // A bake of a sample budget: a quarter of it is the pilot, the rest one pass.
-        if (!progressive_) next_rounds_ = std::max(1, budget_.full_rounds / 4);
-    }
+    if (allocate_) allocation_.start(layout_.tiles, budget_.per_round, context_.techniques.size());
 }
 
 void Baker::report_progress() {
@@ -128,7 +107,7 @@ void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
     // kSetupTimingStride-th point only: clock reads at every point cost ~5 %
     // of a one-round pass (four then, six now), and time_pass needs only the
     // ratios of set-up and rounds to shading.
-    shader.setup_timing.on = pass_count_ == 0 && i % kSetupTimingStride == 0;
+    shader.setup_timing.on = schedule_.passes() == 0 && i % kSetupTimingStride == 0;
     try {
         if (layout_.lightmap()) {
             const TexelFootprint footprint(mesh_, layout_.coverage, i, settings_.smooth_normals,
@@ -163,9 +142,47 @@ void Baker::run_pass(const Pass& pass) {
     });
 }
 
+void Baker::run_passes() {
+    schedule_.size_first_pass();
+    const double sampling_start = elapsed();
+    for (;;) {
+        Pass pass;
+        if (!schedule_.plan_pass(pass)) return;
+        if (schedule_.replace_probe()) forget_probe();
+        const double pass_start = elapsed();
+        run_pass(pass);
+        schedule_.time_pass(pass.samples, elapsed() - pass_start, shaders_);
+        schedule_.count_pass();
+        if (cancel_) {
+            schedule_.end(BakeStatus::Cancelled);
+            return;
+        }
+        record_pass(sampling_start, pass.tail);
+        schedule_.after_pass(pass);
+        if (means_.noise_target_met()) {
+            schedule_.end(BakeStatus::NoiseTarget);
+            return;
+        }
+    }
+}
+
+// The probe pass's estimates leave the running means, the error tallies and
+// the sample count (the next pass's estimates replace them).
+void Baker::forget_probe() {
+    schedule_.forget_probe();
+    replaced_draws_ += means_.forget();
+}
+
+// The bake's convergence after a pass (convergence.h): what the running means
+// have reached, and when.
+void Baker::record_pass(double sampling_start, bool tail) {
+    const double seconds = elapsed() - sampling_start;
+    result_.stats.convergence.push_back(means_.record(seconds, tail));
+}
+
 BakeResult Baker::run() {
     run_passes();
-    remember_pass_cost();
+    schedule_.remember_pass_cost();
     write_outputs();
     fill_margin();
     fill_stats();

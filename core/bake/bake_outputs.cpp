@@ -100,8 +100,8 @@ void Baker::fill_stats() {
         stats.mis_systems += s.counters.systems;
     }
     stats.draws -= std::min(stats.draws, replaced_draws_);  // counts what the values hold
-    stats.status = status_;
-    stats.passes = pass_count_;
+    stats.status = schedule_.status();
+    stats.passes = schedule_.passes();
     stats.texels = layout_.count;
     stats.degenerate_uv_triangles = layout_.coverage.degenerate_uv_triangles;
     stats.overlapping_texels = layout_.coverage.overlapping_texels;

@@ -1,16 +1,50 @@
-// The pass schedule of a bake (baker.h): how many rounds each pass takes
-// under a sample, time or noise budget, and what the passes cost.
+// The pass schedule of a bake (bake_schedule.h): how many rounds each pass
+// takes under a sample, time or noise budget, and what the passes cost.
+#include "bake/bake_schedule.h"
+
 #include <algorithm>
 #include <cmath>
 
-#include "bake/baker.h"
 #include "bake/dyadic_schedule.h"
 
 namespace omis::bake_detail {
 
+PassSchedule::PassSchedule(const Scene& scene, const BakeSettings& settings,
+                           const LightingContext& context, const SampleBudget& budget,
+                           const BakeLayout& layout, const BakeResult& result, std::uint64_t shape,
+                           Clock::time_point start)
+    : scene_(scene), settings_(settings), context_(context), budget_(budget), layout_(layout),
+      result_(result), shape_(shape), start_(start),
+      progressive_(settings.time_budget > 0 || settings.noise_target > 0) {}
+
+void PassSchedule::start(bool allocate) {
+    // Under a time budget the first pass — the part a budget cannot cut — is
+    // a single round, so small budgets are not eaten by it; it also measures
+    // what a round costs here. The optimal strategies solve per pass, and a
+    // one-round pass falls back to balance (too few samples to fit α): its
+    // estimate, averaged in by samples, would add balance's far larger
+    // variance per sample. For them it is a probe: the result if the budget
+    // ends there, else replaced by the passes after it, which start again at
+    // round 0 (the same draws) and take rounds_per_pass or more.
+    const bool under_time = settings_.time_budget > 0;
+    const bool optimal = fits_per_pass();
+    next_rounds_ = !progressive_ ? budget_.full_rounds
+                   : under_time  ? 1
+                                 : settings_.rounds_per_pass;
+    later_min_rounds_ = under_time && optimal ? settings_.rounds_per_pass : 1;
+    probe_ = under_time && optimal && budget_.full_rounds > 1;
+    last_done_ = budget_.last.empty();
+    dyadic_ = under_time && settings_.noise_target <= 0 && !allocate;
+    if (allocate) {
+        probe_ = false;  // the first pass is the allocation's pilot, not replaced
+        // A bake of a sample budget: a quarter of it is the pilot, the rest one pass.
+        if (!progressive_) next_rounds_ = std::max(1, budget_.full_rounds / 4);
+    }
+}
+
 // The next pass of the schedule, cut to what the time budget still fits (as
 // the passes so far predict its duration); false when the bake ends here.
-bool Baker::plan_pass(Pass& pass) {
+bool PassSchedule::plan_pass(Pass& pass) {
     // A pass meant to take the time left ends the bake, unless the prediction
     // behind it was pessimistic (early passes carry the warm-up) and a tenth
     // of the budget or more is still left: a budget is time to use.
@@ -69,7 +103,7 @@ bool Baker::plan_pass(Pass& pass) {
 
 // The next pass of a time budget, to a power of two of rounds or a tail after
 // one (dyadic_schedule.h).
-bool Baker::plan_dyadic_pass(Pass& pass) {
+bool PassSchedule::plan_dyadic_pass(Pass& pass) {
     const double fit = timer_.fit(settings_.time_budget - elapsed()) / budget_.per_round;
     // An optimal strategy's probe is replaced by a first net of
     // rounds_per_pass only where that still fits. Where it does not (small
@@ -108,7 +142,7 @@ bool Baker::plan_dyadic_pass(Pass& pass) {
 // At a power-of-two end: how much the running means moved since the last one
 // (mean square relative change over the baked texels, as the race measures
 // error: ε = 1 % of the mean keeps dark texels finite), for NetRate.
-void Baker::record_net_end() {
+void PassSchedule::record_net_end() {
     double sum_change = 0, sum_value = 0;
     std::size_t covered = 0;
     const bool first = net_end_luminance_.empty();
@@ -140,7 +174,7 @@ void Baker::record_net_end() {
 // one or two samples by a few ms either way, where two rounds in one pass
 // take 37 ms (budgets.txt). Not taken below two rounds: one round is the
 // probe's own size.
-void Baker::size_first_pass() {
+void PassSchedule::size_first_pass() {
     if (!dyadic_) return;
     const auto cost = scene_.measured_pass_cost(shape_);
     if (!cost || !(cost->round > 0)) return;
@@ -154,7 +188,7 @@ void Baker::size_first_pass() {
 // What this bake's passes cost, for the next bake of its shape: the first
 // pass's fixed part, and a round at the rate the last pass ran, blended with
 // the earlier bakes' (blend_round_cost).
-void Baker::remember_pass_cost() const {
+void PassSchedule::remember_pass_cost() const {
     const double round = timer_.per_sample() * budget_.per_round;
     if (status_ == BakeStatus::Cancelled || first_pass_fixed_ < 0 || !(round > 0)) return;
     Scene::PassCost earlier;
@@ -164,42 +198,29 @@ void Baker::remember_pass_cost() const {
     scene_.remember_pass_cost(shape_, {first_pass_fixed_, blend.seconds, blend.rounds});
 }
 
-void Baker::run_passes() {
-    size_first_pass();
-    const double sampling_start = elapsed();
-    for (;;) {
-        Pass pass;
-        if (!plan_pass(pass)) return;
-        if (replace_probe_) forget_probe();
-        const double pass_start = elapsed();
-        run_pass(pass);
-        time_pass(pass.samples, elapsed() - pass_start);
-        ++pass_count_;
-        if (cancel_) {
-            status_ = BakeStatus::Cancelled;
-            return;
-        }
-        record_pass(sampling_start, pass.tail);
-        if (pass.counts) last_done_ = true;
-        if (!pass.counts) last_pass_rounds_ = pass.rounds;
-        if (probe_ && pass_count_ == 1) {
-            replace_probe_ = true;  // the next pass, if any, starts again at round 0
-        } else {
-            done_rounds_ += pass.rounds;
-            if (dyadic_ && power_of_two_floor(done_rounds_) == done_rounds_) record_net_end();
-        }
-        // Doubling keeps the per-pass cost small; under a noise target passes
-        // grow by half only, so a texel overshoots its target by at most
-        // √1.5 ≈ 1.22 in error.
-        const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
-        next_rounds_ = int(std::min<double>(
-            1 << 24, std::max<double>(later_min_rounds_, std::ceil(growth * pass.rounds))));
-        if (!progressive_) next_rounds_ = budget_.full_rounds;  // after an allocation pilot
-        if (means_.noise_target_met()) {
-            status_ = BakeStatus::NoiseTarget;
-            return;
-        }
+// The probe's place in the schedule: its nets and rate start again.
+void PassSchedule::forget_probe() {
+    replace_probe_ = false;
+    net_end_luminance_.clear();
+    rate_.reset();
+}
+
+void PassSchedule::after_pass(const Pass& pass) {
+    if (pass.counts) last_done_ = true;
+    if (!pass.counts) last_pass_rounds_ = pass.rounds;
+    if (probe_ && pass_count_ == 1) {
+        replace_probe_ = true;  // the next pass, if any, starts again at round 0
+    } else {
+        done_rounds_ += pass.rounds;
+        if (dyadic_ && power_of_two_floor(done_rounds_) == done_rounds_) record_net_end();
     }
+    // Doubling keeps the per-pass cost small; under a noise target passes
+    // grow by half only, so a texel overshoots its target by at most
+    // √1.5 ≈ 1.22 in error.
+    const double growth = settings_.noise_target > 0 ? 1.5 : 2.0;
+    next_rounds_ = int(std::min<double>(
+        1 << 24, std::max<double>(later_min_rounds_, std::ceil(growth * pass.rounds))));
+    if (!progressive_) next_rounds_ = budget_.full_rounds;  // after an allocation pilot
 }
 
 // The pass that ran, for the timer. Of the first pass, only what a later pass
@@ -208,13 +229,14 @@ void Baker::run_passes() {
 // scenes, which made the second pass look that much longer and could end a
 // 0.05 s budget a round early); and of that, the part outside the rounds'
 // sampling is the fixed part of every later pass.
-void Baker::time_pass(std::uint32_t samples, double seconds) {
+void PassSchedule::time_pass(std::uint32_t samples, double seconds,
+                             tbb::enumerable_thread_specific<PointLighting>& shaders) {
     if (pass_count_ > 0) {
         timer_.add(samples, seconds);
         return;
     }
     double setup = 0, shading = 0, rounds = 0;
-    for (PointLighting& shader : shaders_) {
+    for (PointLighting& shader : shaders) {
         setup += shader.setup_timing.kept_setup;
         shading += shader.setup_timing.shading;
         rounds += shader.setup_timing.rounds;
@@ -228,22 +250,6 @@ void Baker::time_pass(std::uint32_t samples, double seconds) {
     first_pass_fixed_ = seconds * std::max(0.0, 1.0 - rounds / shading);
     timer_.add(samples, seconds * repeated);
     timer_.set_fixed(seconds * std::max(0.0, repeated - rounds / shading));
-}
-
-// The probe pass's estimates leave the running means, the error tallies and
-// the sample count (the next pass's estimates replace them).
-void Baker::forget_probe() {
-    replace_probe_ = false;
-    net_end_luminance_.clear();
-    rate_.reset();
-    replaced_draws_ += means_.forget();
-}
-
-// The bake's convergence after a pass (convergence.h): what the running means
-// have reached, and when.
-void Baker::record_pass(double sampling_start, bool tail) {
-    const double seconds = elapsed() - sampling_start;
-    result_.stats.convergence.push_back(means_.record(seconds, tail));
 }
 
 }  // namespace omis::bake_detail
