@@ -45,7 +45,9 @@ Baker::Baker(const Scene& scene, const BakeSettings& settings, const BakeProgres
     result_.width = layout_.width;
     result_.height = layout_.height;
     result_.value.assign(layout_.count * 3, 0.f);  // the running means
-    buried_ = count_buried();
+    // Only where some geometry can occlude the points.
+    if (context_.plan.shadow_rays)
+        buried_ = count_buried(scene_, layout_, mesh_, settings_.smooth_normals, contacts_);
     // Corners on another mesh's face: moved behind it (on_contact).
     for (std::size_t i = 0; i < layout_.points.size(); ++i)
         layout_.points[i] = on_contact(layout_.points[i], std::uint32_t(i / 3), &contacts_);
@@ -99,7 +101,8 @@ bool Baker::keep_going() {
 
 void Baker::shade_point(PointLighting& shader, std::size_t i, const Pass& pass,
                         std::vector<Shaded>& out) {
-    if (!layout_.covered(i) || means_.state(i).done || cancel_.load(std::memory_order_relaxed)) return;
+    if (!layout_.covered(i) || means_.state(i).done || cancel_.load(std::memory_order_relaxed))
+        return;
     Shaded r{i, {}, 0, {}, 1};
     double variance[3], own[3];
     StreamEstimates* streams = !means_.streams() ? nullptr : &r.streams;

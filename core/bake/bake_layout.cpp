@@ -1,8 +1,11 @@
 #include "bake/bake_layout.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -104,6 +107,36 @@ std::uint64_t bake_shape(const BakeSettings& s, const BakeLayout& layout) {
         key << ' ' << s.lighting.techniques[k].name() << ':'
             << (k < s.lighting.samples.size() ? s.lighting.samples[k] : 0);
     return std::hash<std::string>{}(key.str());
+}
+
+// Covered texels (corners) whose centre lies inside other geometry, or on a
+// face of another mesh turned its way (BakeStats::buried_texels). Only points
+// in another mesh's bounds trace, but for contacts (one ray where they are not
+// inside).
+std::size_t count_buried(const Scene& scene, const BakeLayout& layout, const Mesh& mesh,
+                         bool smooth_normals, const SurfaceContacts& contacts) {
+    const GeometryScene& geometry = scene.geometry();
+    std::atomic<std::size_t> buried{0};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout.count, 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::size_t here = 0;
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            if (!layout.covered(i)) continue;
+            SurfacePoint p;
+            std::uint32_t t;
+            if (layout.lightmap()) {
+                p = TexelFootprint(mesh, layout.coverage, i, smooth_normals).centre();
+                t = layout.coverage.triangle[i];
+            } else {  // before on_contact moves them
+                t = std::uint32_t(i / 3);
+                p = layout.points[i];
+            }
+            here += contacts.on_other_surface(t, p.x) == SurfaceContacts::Contact::Facing ||
+                    (contacts.may_be_inside(p.x) && inside_other_geometry(geometry, p.x, p.n, p.ng));
+        }
+        buried.fetch_add(here, std::memory_order_relaxed);
+    });
+    return buried.load();
 }
 
 }  // namespace omis::bake_detail

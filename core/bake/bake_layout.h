@@ -9,6 +9,7 @@
 #include "bake/bake.h"
 #include "bake/uv_raster.h"
 #include "render/direct_lighting.h"
+#include "scene/surface_contacts.h"
 
 namespace omis::bake_detail {
 
@@ -75,5 +76,11 @@ struct BakeLayout {
 // counts, the streams, the threads), not the strategy (which costs per pass,
 // not per round) nor the budget.
 std::uint64_t bake_shape(const BakeSettings& s, const BakeLayout& layout);
+
+// How many covered points lie inside other geometry or on another mesh's face
+// turned their way (BakeStats::buried_texels); corners before on_contact
+// moves them.
+std::size_t count_buried(const Scene& scene, const BakeLayout& layout, const Mesh& mesh,
+                         bool smooth_normals, const SurfaceContacts& contacts);
 
 }  // namespace omis::bake_detail

@@ -1,12 +1,7 @@
 // What a bake leaves in its result (baker.h): the values' noise, mask and
 // sample counts, the margin around UV islands, and the statistics.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
-#include <atomic>
 
-#include "bake/bake_points.h"
 #include "bake/baker.h"
 #include "bake/uv_raster.h"
 
@@ -40,36 +35,6 @@ void Baker::write_outputs() {
     stats.buried_texels = buried_;
     stats.mean_relative_error = n_covered ? sum_error / n_covered : 0;
     stats.passes_per_texel = n_covered ? sum_passes / n_covered : 0;
-}
-
-// Covered texels (corners) whose centre lies inside other geometry, or on a
-// face of another mesh turned its way (BakeStats::buried_texels). Only where
-// some geometry can occlude the points, and, but for contacts, only points in
-// another mesh's bounds trace (one ray where they are not inside).
-std::size_t Baker::count_buried() const {
-    if (!context_.plan.shadow_rays) return 0;
-    const GeometryScene& geometry = scene_.geometry();
-    std::atomic<std::size_t> buried{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, layout_.count, 256),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-        std::size_t here = 0;
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            if (!layout_.covered(i)) continue;
-            SurfacePoint p;
-            std::uint32_t t;
-            if (layout_.lightmap()) {
-                p = TexelFootprint(mesh_, layout_.coverage, i, settings_.smooth_normals).centre();
-                t = layout_.coverage.triangle[i];
-            } else {  // before on_contact moves them
-                t = std::uint32_t(i / 3);
-                p = layout_.points[i];
-            }
-            here += contacts_.on_other_surface(t, p.x) == SurfaceContacts::Contact::Facing ||
-                    (contacts_.may_be_inside(p.x) && inside_other_geometry(geometry, p.x, p.n, p.ng));
-        }
-        buried.fetch_add(here, std::memory_order_relaxed);
-    });
-    return buried.load();
 }
 
 // The margin around UV islands: copies of the texels it extends.

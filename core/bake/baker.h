@@ -50,7 +50,6 @@ private:
     void record_pass(double sampling_start, bool tail);
     void forget_probe();
     void write_outputs();
-    std::size_t count_buried() const;
     void fill_margin();
     void fill_stats();
 
