@@ -36,7 +36,7 @@ struct BakeSettings {
     // passes (later passes grow); under a time budget the first pass is one
     // round (the optimal strategies, which solve per pass, go on with this
     // many or more from round 0 where that fits, else keep the first round)
-    // unless an earlier bake of the same shape measured what fits (bake.cpp:
+    // unless an earlier bake of the same shape measured what fits (bake_schedule.cpp:
     // Baker::size_first_pass),
     // and later passes end on powers of two of rounds, with a
     // tail block weighted by its measured error (bake/dyadic_schedule.h).

@@ -87,7 +87,7 @@ public:
     // What a pass of a bake of this scene cost, as the bake measured it, by
     // the bake's shape (a key the baker forms from the mesh, the layout, the
     // techniques and the threads): the next time-budgeted bake of the same
-    // shape sizes its first pass from it (bake.cpp). Artists re-bake a scene
+    // shape sizes its first pass from it (bake/bake_schedule.cpp). Artists re-bake a scene
     // they change little; the first bake, with nothing measured, spends a
     // one-round pass on measuring. Any thread.
     struct PassCost {
