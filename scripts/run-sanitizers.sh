@@ -24,6 +24,7 @@ export LSAN_OPTIONS="suppressions=$root/scripts/sanitizers.supp:print_suppressio
 cmake --build "$build" -j"$(nproc)" --target omis_core_tests omis_capi_estimator_tests \
     omis_capi_scene_tests omis_capi_lighting_tests omis_capi_bake_tests omis_capi_receiver_tests \
     omis_capi_inputs_tests omis_capi_bake_convergence_tests omis_capi_snapshot_tests \
+    omis_capi_world_image_tests \
     omis_bake_floor
 cd "$build"
 ctest --output-on-failure -j"$(nproc)" -L '^(core|capi)$'

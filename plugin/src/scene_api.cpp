@@ -263,12 +263,17 @@ OMIS_API unsigned int omisSetWorld(OMISScene scene, const double radiance[3]) {
 
 namespace {
 
-// The world light of an image (rows top first), with the rotation checked.
-omis::Light world_image_light(std::vector<float> rgb, std::size_t width, std::size_t height,
-                              const double rotation[3], bool compensate) {
+// A world image's size, checked before anything is sized from it.
+void check_world_size(std::size_t width, std::size_t height) {
     if (width == 0 || height == 0 || width > (1u << 16) || height > (1u << 16))
         throw std::invalid_argument("world image: width and height must be in 1..65536, got " +
                                     std::to_string(width) + " x " + std::to_string(height));
+}
+
+// The world light of an image (rows top first), with the rotation checked.
+omis::Light world_image_light(std::vector<float> rgb, std::size_t width, std::size_t height,
+                              const double rotation[3], bool compensate) {
+    check_world_size(width, height);
     const omis::Vec3 euler = rotation ? vec3(rotation, "rotation") : omis::Vec3();
     return omis::make_environment_light(std::make_shared<const omis::EnvironmentMap>(
         std::move(rgb), int(width), int(height), euler, compensate));
@@ -281,6 +286,7 @@ OMIS_API unsigned int omisSetWorldImage(OMISScene scene, const float* rgb, size_
                                         const double rotation[3], bool compensate) {
     return add_light(scene, "omisSetWorldImage", [&] {
         if (!rgb) throw std::invalid_argument("rgb: is NULL");
+        check_world_size(width, height);  // before the copy is sized from them
         const std::size_t row_floats = width * 3;
         const std::size_t stride = rowByteStride ? rowByteStride : row_floats * sizeof(float);
         if (stride < row_floats * sizeof(float) || stride % sizeof(float) != 0)
