@@ -73,6 +73,17 @@ testing::PointCopies copies(const Scene& scene, const Vec3& n,
         testing::lighting_settings(names, samples, 1, strategy, seed), kCopies);
 }
 
+// R·v for the Mapping node's Euler XYZ rotation e, R = Rz·Ry·Rx, written out
+// here independently of the map's own rotation.
+Vec3 euler_xyz(const Vec3& e, Vec3 v) {
+    v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z,
+         std::sin(e.x) * v.y + std::cos(e.x) * v.z};
+    v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y,
+         -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
+    return {std::cos(e.z) * v.x - std::sin(e.z) * v.y,
+            std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
+}
+
 }  // namespace
 
 TEST_CASE("equirectangular convention: Cycles' direction_to_equirectangular",
@@ -117,13 +128,7 @@ TEST_CASE("world image rotation: the Mapping node's Euler XYZ turns the lookup",
     std::normal_distribution<double> g;
     for (int i = 0; i < 200; ++i) {
         const Vec3 d = normalize(Vec3(g(rng), g(rng), g(rng)));
-        Vec3 v = d;
-        v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z,
-             std::sin(e.x) * v.y + std::cos(e.x) * v.z};
-        v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y,
-             -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
-        v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y,
-             std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
+        const Vec3 v = euler_xyz(e, d);
         const auto [col, row] = texel_of(v, w, h);
         CHECK(length(rotated.radiance(d) - at(col, row)) == 0);
     }
@@ -159,16 +164,9 @@ TEST_CASE("world image sampler: pdf, inversion, measure and chi-square", "[envma
                 for (int k = 0; k < 3; ++k) {
                     // Columns of R from the lookups of the axes are not
                     // exposed; rotate by the same Euler product as above.
-                    Vec3 v =
+                    const Vec3 v =
                         k == 0 ? Vec3(1, 0, 0) : (k == 1 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
-                    const Vec3 e = rotation;
-                    v = {v.x, std::cos(e.x) * v.y - std::sin(e.x) * v.z,
-                         std::sin(e.x) * v.y + std::cos(e.x) * v.z};
-                    v = {std::cos(e.y) * v.x + std::sin(e.y) * v.z, v.y,
-                         -std::sin(e.y) * v.x + std::cos(e.y) * v.z};
-                    v = {std::cos(e.z) * v.x - std::sin(e.z) * v.y,
-                         std::sin(e.z) * v.x + std::cos(e.z) * v.y, v.z};
-                    m[k] = v;  // R·axis_k
+                    m[k] = euler_xyz(rotation, v);  // R·axis_k
                 }
                 return m;
             }();
