@@ -61,15 +61,7 @@ def properties_area():
     area = max(window.screen.areas, key=lambda a: a.width * a.height)
     if area.type != 'PROPERTIES':
         area.type = 'PROPERTIES'
-    space = area.spaces.active
-    # The editor's tabs exist once it has been drawn: set the tab on a later call.
-    try:
-        if space.context != 'RENDER':
-            space.context = 'RENDER'
-    except TypeError:
-        pass
-    region = next(r for r in area.regions if r.type == 'WINDOW')
-    return window, area, region
+    return window, area, render_tab(area)
 
 
 def default_properties_area():
@@ -78,14 +70,19 @@ def default_properties_area():
     window = bpy.context.window_manager.windows[0]
     area = min((a for a in window.screen.areas if a.type == 'PROPERTIES'),
                key=lambda a: a.width)
+    return window, area, render_tab(area)
+
+
+def render_tab(area):
+    """Shows Render Properties in a Properties area; returns its main region. The
+    editor's tabs exist once it has been drawn: the tab is set on a later call."""
     space = area.spaces.active
     try:
         if space.context != 'RENDER':
             space.context = 'RENDER'
     except TypeError:
         pass
-    region = next(r for r in area.regions if r.type == 'WINDOW')
-    return window, area, region
+    return next(r for r in area.regions if r.type == 'WINDOW')
 
 
 def info_area():
